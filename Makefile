@@ -1,0 +1,55 @@
+# prg — run `make help` for the targets.
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+EXTRAS ?= dev,sweep
+STAMP := $(VENV)/.setup-$(shell cat pyproject.toml | sha1sum | cut -c1-12)
+export PATH := $(CURDIR)/$(BIN):$(PATH)
+
+.DEFAULT_GOAL := help
+.PHONY: help setup demo test test-all lint format bench clean
+
+help: ## Show this help
+	@awk 'BEGIN {FS = ":.*## "} /^[a-zA-Z_-]+:.*## / {printf "  \033[36m%-10s\033[0m %s\n", $$1, $$2}' $(MAKEFILE_LIST)
+
+$(BIN)/python:
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install -q --upgrade pip
+
+$(STAMP): pyproject.toml | $(BIN)/python
+	@# torch first: the pinned CPU wheel; a looser requirement would pull a multi-GB CUDA build
+	$(BIN)/pip install -q torch==2.13.0
+	$(BIN)/pip install -q -e ".[$(EXTRAS)]"
+	@rm -f $(VENV)/.setup-*
+	@touch $@
+
+setup: $(STAMP) ## Create .venv and install torch (CPU) and the project with its extras (idempotent)
+
+demo: setup ## Run the pipeline (dvc repro): the synthetic dataset and its figures
+	dvc repro
+	@echo
+	@echo "Dataset:  data/prepared/synthetic/ (train/val/test.npz, manifest.json)"
+	@echo "Figures:  data/prepared/synthetic/figures/*.png"
+	@echo "Metrics:  reports/prepare/synthetic/metrics.json  (dvc metrics show)"
+
+test: setup ## Run the default test suite (fast; no `slow` tests)
+	$(BIN)/pytest -m "not slow" -n 2 -q
+
+test-all: setup ## Run every test, `slow` ones included
+	$(BIN)/pytest -n 2 -q
+
+lint: setup ## Check style with ruff
+	$(BIN)/ruff check src studies tests benchmarks
+	$(BIN)/ruff format --check src studies tests benchmarks
+
+format: setup ## Format and fix with ruff
+	$(BIN)/ruff format src studies tests benchmarks
+	$(BIN)/ruff check --fix src studies tests benchmarks
+
+bench: setup ## Run the benchmarks (tables printed, JSON under benchmarks/results/)
+	$(BIN)/python benchmarks/bench_prepare.py
+
+clean: ## Remove caches (keeps .venv, data and runs)
+	rm -rf .pytest_cache .ruff_cache .hypothesis
+	find . -name __pycache__ -type d -prune -exec rm -rf {} +

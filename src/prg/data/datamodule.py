@@ -1,0 +1,146 @@
+"""Lightning DataModule over a prepared dataset; batches are dicts keyed by modality."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import lightning as L
+import numpy as np
+import torch
+from torch.utils.data import DataLoader, Dataset
+
+from prg.data.store import load_split
+from prg.errors import UsageError
+
+MODALITIES: tuple[str, ...] = ("traj", "image", "label")
+
+
+class ModalityDataset(Dataset):
+    """In-memory tensors of one split; indexing by a list of indices returns a whole batch.
+
+    ``dataset[i]`` is a dict of single samples; ``dataset.__getitems__(indices)`` (used by the
+    DataLoader) gathers a batch with one tensor index per modality instead of collating
+    ``batch_size`` small dicts.
+    """
+
+    def __init__(self, arrays: dict[str, np.ndarray], modalities: Sequence[str]):
+        self.modalities = tuple(modalities)
+        self.tensors: dict[str, torch.Tensor] = {}
+        if "traj" in self.modalities:
+            self.tensors["traj"] = torch.from_numpy(np.ascontiguousarray(arrays["traj"]))
+        if "image" in self.modalities:
+            self.tensors["image"] = torch.from_numpy(np.ascontiguousarray(arrays["image"]))
+        if "label" in self.modalities:
+            self.tensors["label"] = torch.from_numpy(arrays["label"].astype(np.int64))
+        self.length = len(arrays["label"])
+
+    def __len__(self) -> int:
+        return self.length
+
+    def _gather(self, index) -> dict[str, torch.Tensor]:
+        batch = {k: v[index] for k, v in self.tensors.items()}
+        if "image" in batch:  # uint8 (.., 28, 28) -> float (.., 1, 28, 28) in [0, 1]
+            batch["image"] = batch["image"].unsqueeze(-3).float().div_(255.0)
+        return batch
+
+    def __getitem__(self, index: int) -> dict[str, torch.Tensor]:
+        return self._gather(index)
+
+    def __getitems__(self, indices: list[int]) -> dict[str, torch.Tensor]:
+        return self._gather(torch.as_tensor(indices, dtype=torch.long))
+
+
+def _identity(batch):
+    return batch
+
+
+class PRGDataModule(L.LightningDataModule):
+    """Train/val/test loaders over ``<data_dir>/prepared/<name>/``.
+
+    Parameters
+    ----------
+    data_dir : path
+        Root data folder (``paths.data_dir``).
+    name : str
+        Prepared dataset name (``data.name``).
+    modalities : sequence of str
+        Any non-empty subset of ``("traj", "image", "label")``; batches hold only these keys:
+        ``traj`` float (B, 200), ``image`` float (B, 1, 28, 28) in [0, 1], ``label`` long (B,).
+    batch_size, num_workers, pin_memory : loader settings
+    seed : int
+        Seeds the training shuffle.
+    """
+
+    def __init__(
+        self,
+        data_dir: str | Path,
+        name: str,
+        modalities: Sequence[str] = MODALITIES,
+        batch_size: int = 128,
+        eval_batch_size: int | None = None,
+        num_workers: int = 0,
+        pin_memory: bool = False,
+        seed: int = 0,
+    ):
+        super().__init__()
+        modalities = tuple(modalities)
+        unknown = [m for m in modalities if m not in MODALITIES]
+        if unknown or not modalities:
+            raise UsageError(
+                f"modalities {list(modalities)} not accepted: choose a non-empty subset of "
+                f"{list(MODALITIES)}"
+            )
+        if batch_size < 1 or num_workers < 0:
+            raise UsageError(f"batch_size must be >= 1 and num_workers >= 0, got "
+                             f"{batch_size}, {num_workers}")
+        self.root = Path(data_dir) / "prepared" / name
+        self.modalities = modalities
+        self.batch_size = batch_size
+        self.eval_batch_size = eval_batch_size or batch_size
+        self.num_workers = num_workers
+        self.pin_memory = pin_memory
+        self.seed = seed
+        self.datasets: dict[str, ModalityDataset] = {}
+
+    @property
+    def manifest(self) -> dict[str, Any]:
+        path = self.root / "manifest.json"
+        if not path.is_file():
+            raise UsageError(f"no prepared dataset at {self.root}: run `prg-prepare` first")
+        return json.loads(path.read_text())
+
+    def setup(self, stage: str | None = None) -> None:
+        wanted = {"fit": ("train", "val"), "validate": ("val",), "test": ("test",)}.get(
+            stage or "", ("train", "val", "test")
+        )
+        for split in wanted:
+            if split not in self.datasets:
+                arrays = load_split(self.root / f"{split}.npz")
+                self.datasets[split] = ModalityDataset(arrays, self.modalities)
+
+    def _loader(self, split: str, shuffle: bool) -> DataLoader:
+        if split not in self.datasets:
+            self.setup(None)
+        generator = torch.Generator().manual_seed(self.seed) if shuffle else None
+        return DataLoader(
+            self.datasets[split],
+            batch_size=self.batch_size if split == "train" else self.eval_batch_size,
+            shuffle=shuffle,
+            num_workers=self.num_workers,
+            pin_memory=self.pin_memory,
+            collate_fn=_identity,
+            generator=generator,
+            persistent_workers=self.num_workers > 0,
+        )
+
+    def train_dataloader(self) -> DataLoader:
+        return self._loader("train", shuffle=True)
+
+    def val_dataloader(self) -> DataLoader:
+        return self._loader("val", shuffle=False)
+
+    def test_dataloader(self) -> DataLoader:
+        return self._loader("test", shuffle=False)

@@ -1,0 +1,1 @@
+"""User-study toolkit (human vs robot handwriting): design, stimuli, web bundles, analysis."""
