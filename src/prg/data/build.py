@@ -14,7 +14,6 @@ import os
 import shutil
 import subprocess
 import time
-from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,6 +28,7 @@ from prg.data.preprocess import TRAJ_LAYOUT, preprocess_stroke, render_batch
 from prg.data.samples import RawSample
 from prg.data.splits import SPLITS, split_writers
 from prg.data.store import save_split
+from prg.data.uji import select_single_stroke_alphabet
 from prg.errors import UsageError
 
 log = logging.getLogger(__name__)
@@ -97,41 +97,20 @@ def load_raw_samples(
         samples = generate(cfg)
         return samples, {"kind": "synthetic", "sha256": cfg.fingerprint(), "path": None}
     if source == "uji":
-        from prg.data.download import resolve_uji_path
+        from prg.data.download import UJI_SHA256, UJI_URL, resolve_uji_path, sha256_file
         from prg.data.uji import read_uji
 
         path = resolve_uji_path(
             data.get("uji_path"),
             data_dir,
             bool(data.get("download", False)),
-            data.get("url"),
-            data.get("sha256"),
+            data.get("uji_url") or UJI_URL,
+            data.get("uji_sha256") or UJI_SHA256,
+            progress=progress,
         )
-        if path.suffix.lower() == ".zip":
-            from prg.data.download import extract_uji_txt
-
-            path = extract_uji_txt(path, data_dir)
         samples = read_uji(path)
-        digest = hashlib.sha256(path.read_bytes()).hexdigest()
-        return samples, {"kind": "uji", "sha256": digest, "path": str(path)}
+        return samples, {"kind": "uji", "sha256": sha256_file(path), "path": str(path)}
     raise UsageError(f"unknown data source {source!r}: accepted are {list(SOURCES)}")
-
-
-def select_usable(samples: list[RawSample]) -> tuple[list[RawSample], dict[str, int]]:
-    """Keep single-stroke samples of the 62-class alphabet; count what was dropped."""
-    counts = Counter(total=len(samples))
-    kept = []
-    for s in samples:
-        if s.char not in ALPHABET:
-            counts["dropped_not_in_alphabet"] += 1
-        elif s.num_strokes != 1:
-            counts["dropped_multi_stroke"] += 1
-        else:
-            kept.append(s)
-    counts["kept"] = len(kept)
-    for key in ("dropped_not_in_alphabet", "dropped_multi_stroke"):
-        counts.setdefault(key, 0)
-    return kept, dict(counts)
 
 
 def preprocess_samples(
@@ -225,7 +204,7 @@ def build_dataset(
         log.info("%s: %.2f s", stage, timings[stage])
 
     raw, input_info = load_raw_samples(data, data_dir, progress)
-    usable, selection = select_usable(raw)
+    usable, selection = select_single_stroke_alphabet(raw)
     lap("parse")
     trajs, usable, degenerate = preprocess_samples(usable, n_points, smooth_sigma, progress)
     selection["dropped_degenerate"] = degenerate

@@ -16,9 +16,9 @@ class RawSample:
     char : str
         The character written (any Unicode character; filtering to the 62 classes happens later).
     writer : str
-        Writer id, stable across the writer's sessions (e.g. ``"UJI_W01"``); splits group by it.
+        Writer id, stable across the writer's sessions (e.g. ``"trn_UJI_W03"``); splits group by it.
     session : str
-        Session id as given by the source (e.g. ``"trn_UJI_W01-01"``).
+        Session id as given by the source (e.g. ``"trn_UJI_W03-01"``).
     strokes : list of ndarray, each shape (k, 2)
         Pen-down strokes in source coordinates, **y axis pointing down** (tablet and Hershey
         convention); preprocessing flips it.
