@@ -21,7 +21,7 @@ def small_data_cfg(**overrides) -> dict:
     cfg = compose_config(
         "prepare",
         [
-            "data.synthetic.n_writers=8",
+            "data.synthetic.n_writers=5",
             "data.augment.per_class=3",
             *[f"{k}={v}" for k, v in overrides.items()],
         ],
@@ -33,7 +33,7 @@ def small_data_cfg(**overrides) -> dict:
 
 @pytest.fixture(scope="session")
 def small_dataset(tmp_path_factory) -> Path:
-    """A prepared synthetic dataset (8 writers, 3 augmented samples per class); returns data_dir."""
+    """A prepared synthetic dataset (5 writers, 3 augmented samples per class); returns data_dir."""
     from prg.data.build import build_dataset
 
     data_dir = tmp_path_factory.mktemp("data")
@@ -56,5 +56,8 @@ def letter_like(rng: np.random.Generator, n: int = 60) -> np.ndarray:
     freqs = rng.uniform(0.3, 2.0, size=(2, 3))
     phases = rng.uniform(0, 2 * np.pi, size=(2, 3))
     amps = rng.uniform(0.5, 3.0, size=(2, 3))
-    pts = (amps[:, None, :] * np.sin(2 * np.pi * freqs[:, None, :] * t[None, :, None] + phases[:, None, :])).sum(-1)
+    pts = (
+        amps[:, None, :]
+        * np.sin(2 * np.pi * freqs[:, None, :] * t[None, :, None] + phases[:, None, :])
+    ).sum(-1)
     return pts.T * rng.uniform(10, 500)

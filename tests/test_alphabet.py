@@ -34,5 +34,5 @@ def test_single_char_error_names_it():
 
 @pytest.mark.parametrize("bad", [-1, 62, 3.5, "a"])
 def test_label_out_of_range(bad):
-    with pytest.raises(UsageError, match="0..61"):
+    with pytest.raises(UsageError, match=r"0\.\.61"):
         label_to_char(bad)

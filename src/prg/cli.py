@@ -17,6 +17,7 @@ from typing import Any
 
 from prg.errors import PRGError, UsageError
 
+
 def config_dir() -> Path:
     """The repository's ``conf/`` folder (``PRG_CONF_DIR`` overrides it)."""
     env = os.environ.get("PRG_CONF_DIR")

@@ -32,7 +32,8 @@ def prepare(cfg: DictConfig) -> BuildResult:
     )
     counts = result.manifest["counts"]
     log.info(
-        "wrote %s: %s", result.out_dir,
+        "wrote %s: %s",
+        result.out_dir,
         ", ".join(f"{s} {c['total']} samples / {c['writers']} writers" for s, c in counts.items()),
     )
     log.info("stage timings (s): %s", json.dumps(result.timings))

@@ -1,0 +1,126 @@
+"""The dataset build as a function: contents, writer-disjointness, reproducibility."""
+
+import json
+
+import numpy as np
+import pytest
+
+from prg.data.build import build_dataset
+from prg.data.store import load_split
+from prg.errors import UsageError
+from tests.conftest import small_data_cfg
+
+
+def _splits(data_dir, name="synthetic"):
+    root = data_dir / "prepared" / name
+    return {s: load_split(root / f"{s}.npz") for s in ("train", "val", "test")}, root
+
+
+def test_prepared_dataset_has_modalities_in_the_documented_format(small_dataset):
+    splits, root = _splits(small_dataset)
+    for arrays in splits.values():
+        n = len(arrays["label"])
+        assert arrays["traj"].shape == (n, 200) and arrays["traj"].dtype == np.float32
+        assert arrays["image"].shape == (n, 28, 28) and arrays["image"].dtype == np.uint8
+        assert arrays["label"].min() >= 0 and arrays["label"].max() <= 61
+        pts = arrays["traj"].reshape(n, 100, 2)
+        assert np.allclose(np.abs(pts).max(axis=(1, 2)), 1.0, atol=1e-5)  # normalised
+        assert (arrays["image"].reshape(n, -1).max(axis=1) > 200).all()  # ink in every image
+    manifest = json.loads((root / "manifest.json").read_text())
+    assert manifest["source"] == "synthetic" and manifest["input"]["kind"] == "synthetic"
+    assert manifest["counts"]["train"]["augmented"] == 3 * 62
+
+
+def test_splits_are_writer_disjoint_and_only_train_is_augmented(small_dataset):
+    splits, _ = _splits(small_dataset)
+    writers = {s: set(a["writer"]) for s, a in splits.items()}
+    assert not writers["train"] & writers["val"]
+    assert not writers["train"] & writers["test"]
+    assert not writers["val"] & writers["test"]
+    assert not splits["val"]["augmented"].any() and not splits["test"]["augmented"].any()
+    train = splits["train"]
+    children = np.flatnonzero(train["augmented"])
+    parents = train["parent"][children]
+    assert (~train["augmented"][parents]).all()
+    assert (train["label"][parents] == train["label"][children]).all()
+
+
+def test_two_builds_with_the_same_seed_are_byte_identical(tmp_path):
+    cfg = small_data_cfg(
+        **{
+            "data.synthetic.n_writers": 4,
+            "data.splits.train": 0.5,
+            "data.splits.val": 0.25,
+            "data.splits.test": 0.25,
+        }
+    )
+    a = build_dataset(cfg, tmp_path / "a", workers=1, progress=False, figures=False).out_dir
+    b = build_dataset(cfg, tmp_path / "b", workers=2, progress=False, figures=False).out_dir
+    for name in ("train.npz", "val.npz", "test.npz", "manifest.json"):
+        assert (a / name).read_bytes() == (b / name).read_bytes(), name
+
+
+def test_rebuild_replaces_the_old_dataset_and_leaves_no_temporaries(tmp_path):
+    cfg = small_data_cfg(**{"data.augment.enabled": False})
+    build_dataset(cfg, tmp_path, workers=1, progress=False, figures=True)
+    result = build_dataset(cfg, tmp_path, workers=1, progress=False, figures=True)
+    assert sorted(p.name for p in (tmp_path / "prepared").iterdir()) == ["synthetic"]
+    figures = sorted(p.name for p in (result.out_dir / "figures").iterdir())
+    assert figures == ["images_per_class.png", "samples_per_class.png"]
+
+
+def test_failed_build_leaves_nothing(tmp_path):
+    cfg = small_data_cfg(**{"data.image.stroke_width": 30.0})
+    with pytest.raises(UsageError, match="stroke_width"):
+        build_dataset(cfg, tmp_path, workers=1, progress=False)
+    assert not (tmp_path / "prepared").exists() or not any((tmp_path / "prepared").iterdir())
+
+
+@pytest.mark.parametrize(
+    "override, match",
+    [
+        ({"data.augment.per_class": -5}, "per_class"),
+        ({"data.preprocess.n_points": 1}, "n_points"),
+        ({"data.source": "mnist"}, "unknown data source"),
+        ({"data.image.size": "big"}, "data.image.size"),
+        ({"data.name": "../escape"}, "plain folder name"),
+    ],
+)
+def test_nonsense_numbers_are_named(tmp_path, override, match):
+    with pytest.raises(UsageError, match=match):
+        build_dataset(small_data_cfg(**override), tmp_path, workers=1, progress=False)
+
+
+def _case_twins(a: str, b: str) -> bool:
+    """Letters whose upper and lower case have the same shape once size is normalised away."""
+    twins = [
+        set("oO0"),
+        set("cC"),
+        set("sS"),
+        set("vV"),
+        set("wW"),
+        set("xX"),
+        set("zZ"),
+        set("uU"),
+        set("pP"),
+        set("kK"),
+        set("yY"),
+        set("lI1"),
+        set("9gq"),
+    ]
+    return a == b or any(a in t and b in t for t in twins)
+
+
+def test_augmented_letters_are_still_recognisable(small_dataset):
+    """1-nearest-neighbour fitted on the originals labels >= 90 % of augmented samples right
+    (62 classes; case twins such as o/O, whose normalised shapes coincide, count as right)."""
+    from prg.data.alphabet import ALPHABET
+
+    train = load_split(small_dataset / "prepared/synthetic/train.npz")
+    originals = ~train["augmented"]
+    ref, ref_labels = train["traj"][originals], train["label"][originals]
+    queries, truth = train["traj"][train["augmented"]], train["label"][train["augmented"]]
+    dist = ((queries[:, None, :] - ref[None, :, :]) ** 2).sum(-1)
+    predicted = ref_labels[dist.argmin(axis=1)]
+    right = [_case_twins(ALPHABET[p], ALPHABET[t]) for p, t in zip(predicted, truth)]
+    assert np.mean(right) >= 0.9, np.mean(right)

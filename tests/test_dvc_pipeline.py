@@ -1,0 +1,60 @@
+"""`dvc repro` runs the same task as the command, and does nothing when nothing changed."""
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import yaml
+
+from tests.conftest import BIN, REPO, run_cli
+
+
+def _small_repo(tmp_path: Path) -> Path:
+    """A git+DVC copy of the project's pipeline files with a small data config."""
+    repo = tmp_path / "repo"
+    ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
+    for item in ("conf", "src", ".dvc", "dvc.yaml", ".dvcignore"):
+        src = REPO / item
+        if src.is_dir():
+            shutil.copytree(src, repo / item, ignore=ignore)
+        else:
+            repo.mkdir(exist_ok=True)
+            shutil.copy2(src, repo / item)
+    shutil.rmtree(repo / ".dvc" / "tmp", ignore_errors=True)
+    syn = repo / "conf/data/synthetic.yaml"
+    cfg = yaml.safe_load(syn.read_text())
+    cfg["synthetic"]["n_writers"] = 5
+    cfg["augment"] = {"per_class": 2}
+    syn.write_text(yaml.safe_dump(cfg))
+    subprocess.run(["git", "init", "-q"], cwd=repo, check=True)
+    return repo
+
+
+def _dvc(repo: Path, *args: str) -> subprocess.CompletedProcess:
+    env = {"PRG_CONF_DIR": str(repo / "conf"), "PATH": f"{BIN}:/usr/bin:/bin"}
+    return run_cli("dvc", *args, cwd=repo, env=env)
+
+
+def test_dvc_repro_prepare_equals_prg_prepare_and_is_idempotent(tmp_path):
+    repo = _small_repo(tmp_path)
+    first = _dvc(repo, "repro", "prepare")
+    assert first.returncode == 0, first.stdout + first.stderr
+    by_dvc = repo / "data/prepared/synthetic"
+
+    direct_root = tmp_path / "direct"
+    direct = run_cli(
+        "prg-prepare",
+        f"paths.root_dir={direct_root}",
+        "progress=false",
+        env={"PRG_CONF_DIR": str(repo / "conf")},
+    )
+    assert direct.returncode == 0, direct.stderr
+    by_cli = direct_root / "data/prepared/synthetic"
+    for name in ("train.npz", "val.npz", "test.npz", "manifest.json"):
+        assert (by_dvc / name).read_bytes() == (by_cli / name).read_bytes(), name
+
+    second = _dvc(repo, "repro", "prepare")
+    assert second.returncode == 0
+    assert "didn't change" in second.stdout or "up to date" in second.stdout, second.stdout
+    metrics = _dvc(repo, "metrics", "show")
+    assert "train_samples" in metrics.stdout
