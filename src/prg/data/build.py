@@ -7,7 +7,6 @@ failed build leaves the previous dataset (or nothing) — never a half-written o
 
 from __future__ import annotations
 
-import hashlib
 import json
 import logging
 import os
@@ -34,6 +33,7 @@ from prg.errors import UsageError
 log = logging.getLogger(__name__)
 
 SOURCES = ("synthetic", "uji")
+_RENDER_CHUNK = 2048  # trajectories per progress step of the render stage
 
 
 @dataclass
@@ -264,12 +264,12 @@ def build_dataset(
 
     for split in SPLITS:
         arrays = split_arrays[split]
-        images = (
-            render_batch(arrays["traj"], size, stroke_width, margin)
-            if len(arrays["traj"])
-            else (np.zeros((0, size, size), np.float32))
-        )
-        arrays["image"] = np.round(images * 255).astype(np.uint8)
+        images = np.zeros((len(arrays["traj"]), size, size), np.uint8)
+        starts = range(0, len(images), _RENDER_CHUNK)
+        for i in tqdm(starts, desc=f"render {split}", disable=not progress, leave=False):
+            ink = render_batch(arrays["traj"][i : i + _RENDER_CHUNK], size, stroke_width, margin)
+            images[i : i + _RENDER_CHUNK] = np.round(ink * 255).astype(np.uint8)
+        arrays["image"] = images
         arrays["traj"] = arrays["traj"].reshape(len(arrays["traj"]), -1).astype(np.float32)
     lap("render")
 
@@ -300,7 +300,7 @@ def build_dataset(
 def _manifest(data, name, input_info, selection, assignment, split_arrays, fit_stats, size):
     counts = {
         split: {
-            "total": int(len(arrays["label"])),
+            "total": len(arrays["label"]),
             "originals": int((~arrays["augmented"]).sum()),
             "augmented": int(arrays["augmented"].sum()),
             "writers": len(assignment[split]),

@@ -94,8 +94,9 @@ class PRGDataModule(L.LightningDataModule):
                 f"{list(MODALITIES)}"
             )
         if batch_size < 1 or num_workers < 0:
-            raise UsageError(f"batch_size must be >= 1 and num_workers >= 0, got "
-                             f"{batch_size}, {num_workers}")
+            raise UsageError(
+                f"batch_size must be >= 1 and num_workers >= 0, got {batch_size}, {num_workers}"
+            )
         self.root = Path(data_dir) / "prepared" / name
         self.modalities = modalities
         self.batch_size = batch_size

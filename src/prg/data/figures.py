@@ -77,8 +77,14 @@ def write_dataset_figures(
                 offset = np.array([2.4 * (col * (per_row + 1) + k), -2.4 * row])
                 lines.append(trajs[idx] + offset)
                 starts.append(lines[-1][0])
-        ax.text(2.4 * (col * (per_row + 1)) - 1.8, -2.4 * row, ALPHABET[c], fontsize=9,
-                va="center", ha="right")
+        ax.text(
+            2.4 * (col * (per_row + 1)) - 1.8,
+            -2.4 * row,
+            ALPHABET[c],
+            fontsize=9,
+            va="center",
+            ha="right",
+        )
     ax.add_collection(LineCollection(lines, colors="black", linewidths=0.7))
     if starts:
         ax.plot(*np.array(starts).T, "o", ms=1.5, color="tab:red")

@@ -45,7 +45,7 @@ def split_writers(
         raise UsageError(f"{n} writer(s) cannot make writer-disjoint splits {values}")
     order = np.random.default_rng(seed).permutation(n)
     shuffled = [unique[i] for i in order]
-    sizes = {s: max(int(round(values[s] * n)), int(values[s] > 0)) for s in ("val", "test")}
+    sizes = {s: max(round(values[s] * n), int(values[s] > 0)) for s in ("val", "test")}
     sizes["train"] = n - sizes["val"] - sizes["test"]
     if sizes["train"] < 1:
         raise UsageError(f"data.splits leaves no training writer out of {n}: {values}")

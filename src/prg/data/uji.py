@@ -354,6 +354,6 @@ def format_uji(samples: Sequence[RawSample]) -> str:
         lines.append(f"WORD {sample.char} {sample.session}")
         lines.append(f"  NUMSTROKES {sample.num_strokes}")
         for stroke in sample.strokes:
-            coords = " ".join(f"{int(round(x))} {int(round(y))}" for x, y in stroke)
+            coords = " ".join(f"{round(float(x))} {round(float(y))}" for x, y in stroke)
             lines.append(f"    POINTS {len(stroke)} # {coords}")
     return "\n".join(lines) + "\n"
