@@ -129,16 +129,20 @@ def preprocess_samples(
 
 
 def git_commit() -> str:
-    """Commit of the code that runs, or ``"unknown"`` outside a git checkout."""
+    """Commit of the code that runs (``+dirty`` when src/ or conf/ have uncommitted changes),
+    or ``"unknown"`` outside a git checkout."""
+    where = Path(prg.__file__).parent
+
+    def git(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run(["git", *args], cwd=where, capture_output=True, text=True, timeout=5)
+
     try:
-        out = subprocess.run(
-            ["git", "rev-parse", "HEAD"],
-            cwd=Path(prg.__file__).parent,
-            capture_output=True,
-            text=True,
-            timeout=5,
-        )
-        return out.stdout.strip() if out.returncode == 0 else "unknown"
+        head = git("rev-parse", "HEAD")
+        if head.returncode != 0:
+            return "unknown"
+        top = git("rev-parse", "--show-toplevel").stdout.strip()
+        dirty = git("status", "--porcelain", "--", f"{top}/src", f"{top}/conf").stdout.strip()
+        return head.stdout.strip() + ("+dirty" if dirty else "")
     except (OSError, subprocess.SubprocessError):
         return "unknown"
 
