@@ -1,0 +1,168 @@
+"""One interface for every multimodal VAE family (CVAE, AVAE, MUSE).
+
+Batches and inputs are dicts keyed by modality (``traj`` (B, 200), ``label`` (B,) long,
+``image`` (B, 1, 28, 28)); a missing modality is simply absent.
+
+- :meth:`MultimodalVAE.encode` — posterior over the family's generative latent from any input
+  subset the family supports (a clear :class:`~prg.errors.UsageError` otherwise);
+- :meth:`MultimodalVAE.decode` — likelihood parameters of a modality from a latent;
+- :meth:`MultimodalVAE.generate` — data-space outputs of a target modality from inputs;
+- :meth:`MultimodalVAE.elbo` — the training loss and its named terms, averaged over the batch;
+- :meth:`MultimodalVAE.importance_path` — what an importance-weighted log-likelihood estimator
+  needs for ``log p(x_target | x_given)`` (proposal, prior, decoder), so the estimator is written
+  once for all families.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Callable
+from dataclasses import dataclass
+from itertools import combinations
+
+import torch
+from torch import nn
+
+from prg.errors import UsageError
+from prg.models.fusion import reparameterise
+from prg.models.likelihoods import MODALITIES, Likelihoods
+
+Inputs = dict[str, torch.Tensor]
+LETTER = {"traj": "T", "label": "S", "image": "I"}  # the paper's names
+_LOG_2PI = math.log(2 * math.pi)
+
+
+@dataclass
+class Gaussian:
+    """Diagonal Gaussian given by mean and log-variance, shape (..., d)."""
+
+    mu: torch.Tensor
+    logvar: torch.Tensor
+
+    def sample(self, n: int | None = None, temperature: float = 1.0) -> torch.Tensor:
+        """Reparameterised samples, shape (n, ..., d) (or (..., d) when ``n`` is None)."""
+        shape = self.mu.shape if n is None else (n, *self.mu.shape)
+        eps = torch.randn(shape, device=self.mu.device, dtype=self.mu.dtype) * temperature
+        return reparameterise(self.mu, self.logvar, eps)
+
+    def log_prob(self, z: torch.Tensor) -> torch.Tensor:
+        """log N(z; mu, var) summed over the last dimension."""
+        return -0.5 * ((z - self.mu) ** 2 / self.logvar.exp() + self.logvar + _LOG_2PI).sum(-1)
+
+
+@dataclass
+class ImportancePath:
+    """Everything an importance-weighted estimate of ``log p(x_target | x_given)`` needs.
+
+    ``w_k = log p(x_target | decode(z_k)) + prior.log_prob(z_k) - proposal.log_prob(z_k)`` with
+    ``z_k ~ proposal``; the estimate is ``logmeanexp_k w_k``.
+    """
+
+    proposal: Gaussian
+    decode: Callable[[torch.Tensor], torch.Tensor]
+    target: str
+    latent_dim: int
+
+
+class MultimodalVAE(nn.Module, ABC):
+    """Base class: the modalities a family knows and the interface it implements."""
+
+    family: str = ""
+
+    def __init__(self, modalities: tuple[str, ...], latent_dim: int, traj_std: float = 0.1):
+        super().__init__()
+        unknown = [m for m in modalities if m not in MODALITIES]
+        if unknown:
+            raise UsageError(f"unknown modalities {unknown}: accepted are {list(MODALITIES)}")
+        self.modalities = tuple(modalities)
+        self.latent_dim = latent_dim
+        self.likelihoods = Likelihoods(traj_std=traj_std)
+
+    # ---- interface -----------------------------------------------------------------------
+    @abstractmethod
+    def encode(self, inputs: Inputs) -> Gaussian:
+        """Posterior over the generative latent from the given inputs."""
+
+    @abstractmethod
+    def decode(self, z: torch.Tensor, modality: str, inputs: Inputs | None = None) -> torch.Tensor:
+        """Likelihood parameters of ``modality`` (``inputs`` carries a CVAE's condition)."""
+
+    @abstractmethod
+    def elbo(self, batch: Inputs) -> dict[str, torch.Tensor]:
+        """Loss terms averaged over the batch; ``loss`` is the total to minimise."""
+
+    @abstractmethod
+    def importance_path(self, target: str, given: Inputs) -> ImportancePath:
+        """Proposal and decoder for ``log p(x_target | given)`` (``given`` may be empty)."""
+
+    # ---- shared behaviour ----------------------------------------------------------------
+    @property
+    def accepted_inputs(self) -> list[tuple[str, ...]]:
+        """Input subsets :meth:`encode` accepts (default: every non-empty subset)."""
+        return [
+            s for r in range(1, len(self.modalities) + 1) for s in combinations(self.modalities, r)
+        ]
+
+    @property
+    def generated_modalities(self) -> tuple[str, ...]:
+        """Modalities :meth:`generate` can produce (default: all it models)."""
+        return self.modalities
+
+    def accepts(self, inputs: Inputs) -> bool:
+        return tuple(m for m in self.modalities if m in inputs) in self.accepted_inputs and all(
+            m in self.modalities for m in inputs
+        )
+
+    def check_inputs(self, inputs: Inputs) -> None:
+        """Raise a UsageError naming what was given and what this family accepts."""
+        if not self.accepts(inputs):
+            given = [m for m in MODALITIES if m in inputs] or list(inputs)
+            accepted = " or ".join("{" + ", ".join(s) + "}" for s in self.accepted_inputs)
+            raise UsageError(
+                f"{self.family} cannot encode inputs {{{', '.join(given) or 'nothing'}}}: "
+                f"it accepts {accepted}"
+            )
+
+    @torch.no_grad()
+    def generate(
+        self, inputs: Inputs, target: str, n: int = 1, temperature: float = 0.0
+    ) -> torch.Tensor:
+        """Data-space outputs of ``target`` from ``inputs``.
+
+        Parameters
+        ----------
+        inputs : dict
+            Any subset the family supports.
+        target : str
+            Modality to generate.
+        n : int
+            Samples per input.
+        temperature : float
+            0 decodes the posterior mean (every sample equal); otherwise latents are drawn with
+            their standard deviation scaled by ``temperature``.
+
+        Returns
+        -------
+        Tensor, shape (n, B, ...)
+            Trajectory means (n, B, 200), class probabilities (n, B, 62) or pixel
+            probabilities (n, B, 1, 28, 28).
+        """
+        if target not in self.generated_modalities:
+            raise UsageError(
+                f"{self.family} cannot generate {target!r}: it generates "
+                f"{list(self.generated_modalities)}"
+            )
+        posterior = self.encode(inputs)
+        z = (
+            posterior.mu.expand(n, *posterior.mu.shape)
+            if temperature == 0
+            else posterior.sample(n, temperature)
+        )
+        flat = z.reshape(-1, z.shape[-1])
+        context = None
+        if inputs:
+            context = {k: v.repeat(n, *([1] * (v.dim() - 1))) for k, v in inputs.items()}
+        params = self.decode(flat, target, context)
+        out = self.likelihoods.mean(target, params)
+        return out.reshape(n, -1, *out.shape[1:])

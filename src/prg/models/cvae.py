@@ -1,0 +1,76 @@
+"""CVAE(T | S), the paper's baseline: a trajectory VAE conditioned on the label.
+
+Encoder q(z | x_T, y) on concat(x_T, onehot(y)); decoder p(x_T | z, y) on concat(z, onehot(y));
+prior N(0, I). Loss: reconstruction + KL. Generation from a label: z from the prior (its mean 0
+with ``temperature=0``), decoded with the label.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import torch
+import torch.nn.functional as F
+
+from prg.data.alphabet import NUM_CLASSES
+from prg.models.base import Gaussian, ImportancePath, Inputs, MultimodalVAE
+from prg.models.components import TrajectoryDecoder, TrajectoryEncoder
+from prg.models.fusion import kl_standard_normal, reparameterise
+
+
+class CVAE(MultimodalVAE):
+    family = "cvae"
+
+    def __init__(self, latent_dim: int = 16, traj_std: float = 0.1, kl_weight: float = 1.0):
+        super().__init__(("traj", "label"), latent_dim, traj_std)
+        self.kl_weight = kl_weight
+        self.encoder = TrajectoryEncoder(latent_dim, extra_inputs=NUM_CLASSES)
+        self.decoder = TrajectoryDecoder(latent_dim, extra_inputs=NUM_CLASSES)
+
+    accepted_inputs: ClassVar[list[tuple[str, ...]]] = [("traj", "label"), ("label",)]
+    generated_modalities: ClassVar[tuple[str, ...]] = ("traj",)
+
+    @staticmethod
+    def _onehot(label: torch.Tensor) -> torch.Tensor:
+        return F.one_hot(label, NUM_CLASSES).float()
+
+    def encode(self, inputs: Inputs) -> Gaussian:
+        """q(z | x_T, y) from both; the prior N(0, I) from the label alone (the map psi_S)."""
+        self.check_inputs(inputs)
+        label = inputs["label"]
+        if "traj" in inputs:
+            return Gaussian(*self.encoder(torch.cat([inputs["traj"], self._onehot(label)], -1)))
+        zeros = torch.zeros(len(label), self.latent_dim, device=label.device)
+        return Gaussian(zeros, zeros.clone())
+
+    def decode(self, z: torch.Tensor, modality: str, inputs: Inputs | None = None) -> torch.Tensor:
+        if modality != "traj" or not inputs or "label" not in inputs:
+            raise ValueError("the CVAE decodes trajectories only, given the label in `inputs`")
+        return self.decoder(torch.cat([z, self._onehot(inputs["label"])], -1))
+
+    def elbo(self, batch: Inputs) -> dict[str, torch.Tensor]:
+        posterior = self.encode({"traj": batch["traj"], "label": batch["label"]})
+        z = reparameterise(posterior.mu, posterior.logvar)
+        rec = -self.likelihoods.log_prob("traj", self.decode(z, "traj", batch), batch["traj"])
+        kl = kl_standard_normal(posterior.mu, posterior.logvar)
+        terms = {"rec_traj": rec.mean(), "kl": kl.mean()}
+        terms["loss"] = terms["rec_traj"] + self.kl_weight * terms["kl"]
+        terms["elbo"] = -(terms["rec_traj"] + terms["kl"])
+        return terms
+
+    def importance_path(self, target: str, given: Inputs) -> ImportancePath:
+        """log p(x_T | y): proposal q(z | x_T, y), decoder with y (as the reference code)."""
+        if target != "traj" or set(given) != {"traj", "label"}:
+            raise ValueError("the CVAE estimates log p(x_T | x_S) only (given traj and label)")
+        return ImportancePath(
+            self.encode(given),
+            lambda z: self.decode(z, "traj", _repeat(given, z)),
+            "traj",
+            self.latent_dim,
+        )
+
+
+def _repeat(inputs: Inputs, z: torch.Tensor) -> Inputs:
+    """Tile inputs (B, ...) to match latents (K*B, d) laid out as K blocks of B."""
+    k = z.shape[0] // len(next(iter(inputs.values())))
+    return {m: v.repeat(k, *([1] * (v.dim() - 1))) for m, v in inputs.items()}

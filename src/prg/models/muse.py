@@ -1,0 +1,154 @@
+"""MUSE (Vasco et al. 2022): a hierarchical multimodal VAE robust to missing modalities.
+
+Bottom level: one VAE per modality m, q(z_m | x_m) and g_m(z_m) (the appendix networks, latent 16).
+Top level: per modality a *top expert* h_m: z_m -> (mu, logvar) of the top latent c (8 dims) and a
+*top decoder* d_m: c -> z_m (MLPs 512 x 3). The top posterior from any subset S of modalities is
+the product of the experts of S **and the prior expert N(0, I)**; a missing modality is an expert
+left out. Written for any number of modalities >= 2.
+
+Loss per sample, averaged over the batch (weights by role, the paper's defaults):
+
+- ``sum_m lambda_m Rec_m(x_m, g_m(z_m)) + alpha_m KL(q(z_m | x_m) || N(0, I))``   bottom ELBOs
+- ``+ sum_m gamma_m ||d_m(c) - sg(z_m)||^2``  top reconstruction of the (detached) bottom codes
+- ``+ beta KL(q(c | sg(z_all)) || N(0, I))``  top KL (optionally warmed up linearly)
+- ``+ delta * mean over proper non-empty subsets S of SKL(q(c | sg(z_S)), q(c | sg(z_all)))``
+
+The top level never sends gradients into the bottom VAEs; every subset is computed on every batch.
+Cross-modal generation: each available x_m -> bottom posterior mean -> h_m -> product with the
+prior -> c (mean, or sampled) -> x_target = g_target(d_target(c)).
+"""
+
+from __future__ import annotations
+
+from itertools import combinations
+
+import torch
+from torch import nn
+
+from prg.models.base import Gaussian, ImportancePath, Inputs, MultimodalVAE
+from prg.models.components import DECODERS, ENCODERS, GaussianHead, mlp
+from prg.models.fusion import kl_standard_normal, product_of_experts, reparameterise, symmetric_kl
+
+
+def proper_subsets(modalities: tuple[str, ...]) -> list[tuple[str, ...]]:
+    """Every proper non-empty subset, smallest first (3 singletons + 3 pairs for 3 modalities)."""
+    return [s for r in range(1, len(modalities)) for s in combinations(modalities, r)]
+
+
+class TopExpert(nn.Module):
+    """h_m: z_m (16) -> FC 512 x3 -> (mu, logvar) of c (8)."""
+
+    def __init__(self, latent_dim: int, top_dim: int, hidden: int = 512):
+        super().__init__()
+        self.body = mlp([latent_dim, hidden, hidden, hidden])
+        self.head = GaussianHead(hidden, top_dim)
+
+    def forward(self, z: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        return self.head(self.body(z))
+
+
+class MUSE(MultimodalVAE):
+    family = "muse"
+
+    def __init__(
+        self,
+        modalities: tuple[str, ...] = ("traj", "label", "image"),
+        latent_dim: int = 16,
+        top_latent_dim: int = 8,
+        traj_std: float = 0.1,
+        lambdas: dict[str, float] | None = None,
+        alphas: dict[str, float] | None = None,
+        gammas: dict[str, float] | None = None,
+        beta: float = 1.0,
+        delta: float = 1.0,
+    ):
+        super().__init__(tuple(modalities), latent_dim, traj_std)
+        if len(self.modalities) < 2:
+            raise ValueError("MUSE needs at least two modalities")
+        default_lambda = {"traj": 1.0, "label": 50.0, "image": 1.0}
+
+        def weights(given, default):
+            return {m: float((given or {}).get(m, default(m))) for m in self.modalities}
+
+        self.lambdas = weights(lambdas, lambda m: default_lambda[m])
+        self.alphas = weights(alphas, lambda m: 1.0)
+        self.gammas = weights(gammas, lambda m: 10.0)
+        self.beta, self.delta = beta, delta
+        self.beta_scale = 1.0  # set by the training loop for a linear warm-up of beta
+        self.top_latent_dim = top_latent_dim
+        self.encoders = nn.ModuleDict({m: ENCODERS[m](latent_dim) for m in self.modalities})
+        self.decoders = nn.ModuleDict({m: DECODERS[m](latent_dim) for m in self.modalities})
+        self.top_experts = nn.ModuleDict(
+            {m: TopExpert(latent_dim, top_latent_dim) for m in self.modalities}
+        )
+        self.top_decoders = nn.ModuleDict(
+            {m: mlp([top_latent_dim, 512, 512, 512, latent_dim], False) for m in self.modalities}
+        )
+
+    # ---- top level ----------------------------------------------------------------------
+    def top_posterior(self, codes: dict[str, torch.Tensor]) -> Gaussian:
+        """q(c | z_S): product of the given modalities' top experts and the prior expert."""
+        return self._fuse({m: self.top_experts[m](z) for m, z in codes.items()})
+
+    @staticmethod
+    def _fuse(experts: dict[str, tuple[torch.Tensor, torch.Tensor]]) -> Gaussian:
+        return Gaussian(
+            *product_of_experts([e[0] for e in experts.values()], [e[1] for e in experts.values()])
+        )
+
+    def encode(self, inputs: Inputs) -> Gaussian:
+        """q(c | x_S) for any non-empty subset S: bottom posterior means through the experts."""
+        self.check_inputs(inputs)
+        codes = {m: self.encoders[m](inputs[m])[0] for m in self.modalities if m in inputs}
+        return self.top_posterior(codes)
+
+    def decode(self, z: torch.Tensor, modality: str, inputs: Inputs | None = None) -> torch.Tensor:
+        """x_m parameters from the top latent c: g_m(d_m(c))."""
+        return self.decoders[modality](self.top_decoders[modality](z))
+
+    # ---- training -----------------------------------------------------------------------
+    def elbo(self, batch: Inputs) -> dict[str, torch.Tensor]:
+        terms: dict[str, torch.Tensor] = {}
+        loss = 0.0
+        codes = {}
+        for m in self.modalities:
+            mu, logvar = self.encoders[m](batch[m])
+            z = reparameterise(mu, logvar)
+            rec = -self.likelihoods.log_prob(m, self.decoders[m](z), batch[m]).mean()
+            kl = kl_standard_normal(mu, logvar).mean()
+            terms[f"rec_{m}"], terms[f"kl_{m}"] = rec, kl
+            loss = loss + self.lambdas[m] * rec + self.alphas[m] * kl
+            codes[m] = z.detach()  # the top level never trains the bottom VAEs
+
+        experts = {m: self.top_experts[m](z) for m, z in codes.items()}  # each computed once
+        q_all = self._fuse(experts)
+        c = reparameterise(q_all.mu, q_all.logvar)
+        for m in self.modalities:
+            top_rec = (self.top_decoders[m](c) - codes[m]).pow(2).sum(-1).mean()
+            terms[f"top_rec_{m}"] = top_rec
+            loss = loss + self.gammas[m] * top_rec
+        terms["top_kl"] = kl_standard_normal(q_all.mu, q_all.logvar).mean()
+        loss = loss + self.beta * self.beta_scale * terms["top_kl"]
+        subset_posteriors = [
+            self._fuse({m: experts[m] for m in s}) for s in proper_subsets(self.modalities)
+        ]
+        skl = torch.stack(
+            [symmetric_kl(q.mu, q.logvar, q_all.mu, q_all.logvar).mean() for q in subset_posteriors]
+        ).mean()
+        terms["subset_skl"] = skl
+        terms["loss"] = loss + self.delta * skl
+        return terms
+
+    def importance_path(self, target: str, given: Inputs) -> ImportancePath:
+        """Marginal log p(x_m): given = {m: x_m} uses the bottom VAE of m (proposal q(z_m | x_m),
+        decoder g_m, latent 16). Conditional log p(x_a | x_S): proposal q(c | x_S) from the
+        given subset, decoder g_a(d_a(c)), latent 8 (the reference code's estimator)."""
+        self.check_inputs(given)
+        if set(given) == {target}:
+            mu, logvar = self.encoders[target](given[target])
+            return ImportancePath(
+                Gaussian(mu, logvar), lambda z: self.decoders[target](z), target, self.latent_dim
+            )
+        return ImportancePath(
+            self.encode(given), lambda c: self.decode(c, target), target, self.top_latent_dim
+        )

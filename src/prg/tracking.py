@@ -1,0 +1,137 @@
+"""MLflow helpers: the default SQLite store, the logger, run tags, sweep parent runs.
+
+Default store: ``sqlite:///<root>/mlruns.db`` with artifacts in ``<root>/mlartifacts``;
+``MLFLOW_TRACKING_URI`` overrides the store (any server). Review runs with
+``mlflow ui --backend-store-uri sqlite:///mlruns.db``.
+
+A Hydra multirun groups its jobs under one parent run: :class:`SweepParentRun` (a Hydra
+callback, enabled in ``conf/hydra/default.yaml``) opens the parent when the sweep starts and
+exports its id in ``PRG_PARENT_RUN_ID``; each job's run is tagged ``mlflow.parentRunId``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import time
+from pathlib import Path
+from typing import Any
+
+from hydra.experimental.callback import Callback as HydraCallback
+from omegaconf import DictConfig
+
+PARENT_ENV = "PRG_PARENT_RUN_ID"
+
+
+def artifact_location(path: str | os.PathLike) -> str:
+    """An absolute ``file://`` URI, so artifacts are found from any working directory."""
+    return Path(path).expanduser().resolve().as_uri()
+
+
+def sqlite_uri(path: str | os.PathLike) -> str:
+    """``sqlite:///`` URI of a database file (absolute, so any working directory works)."""
+    return "sqlite:///" + str(Path(path).expanduser().resolve())
+
+
+def tracking_uri(configured: str | None, root_dir: str | os.PathLike) -> str:
+    """``MLFLOW_TRACKING_URI`` if set, else the configured URI, else the project's SQLite."""
+    return (
+        os.environ.get("MLFLOW_TRACKING_URI")
+        or configured
+        or sqlite_uri(Path(root_dir) / "mlruns.db")
+    )
+
+
+def get_experiment_id(client, name: str, artifacts: str) -> str:
+    """Id of the experiment ``name``, created (with its artifact location) if missing.
+
+    Tolerates a concurrent creation by another sweep job.
+    """
+    from mlflow.exceptions import MlflowException
+
+    for _ in range(5):
+        experiment = client.get_experiment_by_name(name)
+        if experiment is not None:
+            return experiment.experiment_id
+        try:
+            return client.create_experiment(name, artifact_location=artifacts)
+        except MlflowException:
+            time.sleep(0.5)
+    raise RuntimeError(f"could not create or find MLflow experiment {name!r}")
+
+
+def mlflow_logger(
+    experiment_name: str,
+    run_name: str,
+    tracking_uri: str,
+    artifact_location: str,
+    run_id: str | None = None,
+    tags: dict[str, str] | None = None,
+):
+    """A Lightning ``MLFlowLogger`` on an explicit store (never the default ./mlruns)."""
+    from lightning.pytorch.loggers import MLFlowLogger
+    from mlflow import MlflowClient
+
+    client = MlflowClient(tracking_uri)
+    get_experiment_id(client, experiment_name, artifact_location)
+    return MLFlowLogger(
+        experiment_name=experiment_name,
+        run_name=None if run_id else run_name,
+        tracking_uri=tracking_uri,
+        artifact_location=artifact_location,
+        run_id=run_id,
+        tags=None if run_id else tags,
+        log_model=False,
+    )
+
+
+def file_sha256(path: str | os.PathLike) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def flatten(cfg: Any, prefix: str = "") -> dict[str, Any]:
+    """Nested dict/list config -> ``{"a.b.c": value}`` with scalar values (MLflow params)."""
+    out: dict[str, Any] = {}
+    if isinstance(cfg, dict):
+        for key, value in cfg.items():
+            out.update(flatten(value, f"{prefix}{key}."))
+    elif isinstance(cfg, list | tuple) and any(isinstance(v, dict | list) for v in cfg):
+        for i, value in enumerate(cfg):
+            out.update(flatten(value, f"{prefix}{i}."))
+    else:
+        out[prefix[:-1]] = cfg
+    return out
+
+
+class SweepParentRun(HydraCallback):
+    """Hydra callback: one MLflow parent run per multirun; jobs attach to it as children."""
+
+    def __init__(self, enabled: bool = True):
+        self.enabled = enabled
+        self.run_id: str | None = None
+        self.client = None
+
+    def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
+        if not self.enabled or "logger" not in config or os.environ.get(PARENT_ENV):
+            return
+        from mlflow import MlflowClient
+
+        uri = tracking_uri(config.logger.get("tracking_uri"), config.paths.root_dir)
+        self.client = MlflowClient(uri)
+        experiment_id = get_experiment_id(
+            self.client, config.logger.experiment_name, config.logger.artifact_location
+        )
+        overrides = " ".join(config.hydra.overrides.task)
+        run = self.client.create_run(
+            experiment_id,
+            run_name=f"sweep {time.strftime('%Y-%m-%d %H:%M:%S')}",
+            tags={"prg.sweep": "parent", "prg.sweep.overrides": overrides[:5000]},
+        )
+        self.run_id = run.info.run_id
+        os.environ[PARENT_ENV] = self.run_id
+
+    def on_multirun_end(self, config: DictConfig, **kwargs: Any) -> None:
+        if self.run_id is not None:
+            self.client.set_terminated(self.run_id)
+            os.environ.pop(PARENT_ENV, None)
+            self.run_id = None

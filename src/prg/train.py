@@ -1,0 +1,211 @@
+"""``prg-train``: train one model family (Hydra; multirun sweeps group under an MLflow parent).
+
+Examples
+--------
+``prg-train model=muse experiment=quick``
+``prg-train -m model=cvae,avae_ts,avae_ti,muse seed=0,1 experiment=quick``
+``prg-train model=muse ckpt_path=checkpoints/prg/muse-seed0/last.ckpt``   resume, same MLflow run
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import lightning as L
+import torch
+from hydra.utils import instantiate
+from omegaconf import DictConfig, OmegaConf
+
+from prg.cli import hydra_command
+from prg.data.build import git_commit, write_json
+from prg.data.datamodule import PRGDataModule
+from prg.errors import UsageError
+from prg.models.module import PRGModule
+from prg.tracking import PARENT_ENV, artifact_location, file_sha256, flatten, tracking_uri
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class TrainResult:
+    """What a training run produced."""
+
+    module: PRGModule
+    trainer: L.Trainer
+    metrics: dict[str, float]
+    run_id: str | None
+    best_checkpoint: str
+    last_checkpoint: str
+
+
+def read_checkpoint(path: str | os.PathLike) -> dict[str, Any]:
+    """Load a Lightning checkpoint's dict, or raise a UsageError naming the file."""
+    path = Path(path)
+    if not path.is_file():
+        raise UsageError(f"checkpoint {path} does not exist")
+    try:
+        ckpt = torch.load(path, map_location="cpu", weights_only=False)
+    except Exception as err:  # torch raises many types for a file that is not a checkpoint
+        raise UsageError(
+            f"checkpoint {path} is not a readable checkpoint ({type(err).__name__})"
+        ) from None
+    if not isinstance(ckpt, dict) or "state_dict" not in ckpt or "hyper_parameters" not in ckpt:
+        raise UsageError(f"checkpoint {path} is not a prg training checkpoint")
+    return ckpt
+
+
+def _check_modalities(cfg: DictConfig) -> None:
+    provided = list(cfg.data.loader.modalities)
+    missing = [m for m in cfg.model.modalities if m not in provided]
+    if missing:
+        raise UsageError(
+            f"model {cfg.model.name} needs modalities {list(cfg.model.modalities)} but the data "
+            f"provides {provided} (data.loader.modalities): {missing} missing"
+        )
+
+
+_TRAINER_NUMBERS = (
+    "max_epochs",
+    "max_steps",
+    "limit_train_batches",
+    "limit_val_batches",
+    "check_val_every_n_epoch",
+    "log_every_n_steps",
+)
+
+
+def _check_numbers(cfg: DictConfig) -> None:
+    for key in _TRAINER_NUMBERS:
+        value = cfg.trainer.get(key)
+        if value is not None and (isinstance(value, bool) or not isinstance(value, int | float)):
+            raise UsageError(f"trainer.{key} must be a number, got {value!r}")
+    for key in ("seed", "batch_size"):
+        node = cfg if key == "seed" else cfg.model
+        if (
+            isinstance(node[key], bool)
+            or not isinstance(node[key], int)
+            or node[key] < (0 if key == "seed" else 1)
+        ):
+            raise UsageError(
+                f"{'model.' if key == 'batch_size' else ''}{key} must be a "
+                f"{'non-negative' if key == 'seed' else 'positive'} integer, "
+                f"got {node[key]!r}"
+            )
+
+
+def _build(node: Any, what: str, **kwargs: Any) -> Any:
+    """instantiate() with a one-line UsageError naming the config node on bad values."""
+    from hydra.errors import InstantiationException
+
+    try:
+        return instantiate(node, **kwargs)
+    except InstantiationException as err:
+        cause = err.__cause__ or err
+        raise UsageError(f"{what} config: {' '.join(str(cause).split())}") from None
+
+
+def _manifest(cfg: DictConfig) -> tuple[dict[str, Any], str]:
+    path = Path(cfg.paths.data_dir) / "prepared" / cfg.data.name / "manifest.json"
+    if not path.is_file():
+        raise UsageError(
+            f"no prepared dataset at {path.parent}: run `prg-prepare data={cfg.data.name}` first"
+        )
+    return json.loads(path.read_text()), file_sha256(path)
+
+
+def train(cfg: DictConfig) -> TrainResult:
+    """Task: fit ``cfg.model`` on ``cfg.data`` with MLflow tracking and fixed-path checkpoints."""
+    _check_modalities(cfg)
+    _check_numbers(cfg)
+    manifest, manifest_hash = _manifest(cfg)
+    resume = None
+    if cfg.get("ckpt_path"):
+        resume = read_checkpoint(cfg.ckpt_path)
+        family = resume["hyper_parameters"]["model"]["_target_"]
+        if family != cfg.model.module.model._target_:
+            raise UsageError(
+                f"checkpoint {cfg.ckpt_path} holds a {family} model, not {cfg.model.name} "
+                f"({cfg.model.module.model._target_}): pass the matching model=..."
+            )
+    L.seed_everything(cfg.seed, workers=True)
+
+    datamodule = PRGDataModule(
+        cfg.paths.data_dir,
+        cfg.data.name,
+        modalities=list(cfg.model.modalities),
+        batch_size=cfg.model.batch_size,
+        num_workers=cfg.data.loader.num_workers,
+        seed=cfg.seed,
+    )
+    module_cfg = OmegaConf.to_container(cfg.model.module, resolve=True)
+    module: PRGModule = _build(module_cfg, "model", _recursive_=False)
+
+    uri = tracking_uri(cfg.logger.get("tracking_uri"), cfg.paths.root_dir)
+    tags = {
+        "prg.family": cfg.model.name,
+        "prg.data.source": manifest["source"],
+        "prg.data.name": cfg.data.name,
+        "prg.data.manifest_sha256": manifest_hash,
+        "prg.git_commit": git_commit(),
+        "prg.experiment": str(cfg.get("profile") or "default"),
+        "prg.seed": str(cfg.seed),
+    }
+    if os.environ.get(PARENT_ENV):
+        tags["mlflow.parentRunId"] = os.environ[PARENT_ENV]
+    logger = _build(
+        cfg.logger,
+        "logger",
+        tracking_uri=uri,
+        artifact_location=artifact_location(cfg.logger.artifact_location),
+        run_id=(resume or {}).get("mlflow_run_id"),
+        tags=tags,
+    )
+    callbacks = [_build(c, f"callbacks.{name}") for name, c in cfg.callbacks.items()]
+    from prg.callbacks import MLflowRun
+
+    callbacks.append(
+        MLflowRun(
+            config_yaml=OmegaConf.to_yaml(cfg, resolve=True),
+            params=flatten(OmegaConf.to_container(cfg, resolve=True)),
+            register_as=f"prg-{cfg.model.name}" if cfg.get("register_model") else None,
+        )
+    )
+    trainer: L.Trainer = _build(cfg.trainer, "trainer", logger=logger, callbacks=callbacks)
+    trainer.fit(module, datamodule=datamodule, ckpt_path=cfg.get("ckpt_path"))
+
+    metrics = {k: float(v) for k, v in trainer.callback_metrics.items()}
+    checkpoint = trainer.checkpoint_callback
+    best = checkpoint.best_model_path if checkpoint else ""
+    last = checkpoint.last_model_path if checkpoint else ""
+    if cfg.get("export_dir") and best:
+        _export(Path(cfg.export_dir), best, metrics, logger.run_id, cfg)
+    return TrainResult(module, trainer, metrics, logger.run_id, best, last)
+
+
+def _export(folder: Path, best: str, metrics: dict[str, float], run_id: str, cfg) -> None:
+    """Copy the best checkpoint to ``<folder>/model.ckpt`` and write ``metrics.json`` (DVC)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    tmp = folder / ".model.ckpt.tmp"
+    shutil.copyfile(best, tmp)
+    os.replace(tmp, folder / "model.ckpt")
+    write_json(
+        folder / "metrics.json",
+        {
+            "family": cfg.model.name,
+            "mlflow_run_id": run_id,
+            "seed": cfg.seed,
+            **{k.replace("/", "_"): round(v, 4) for k, v in sorted(metrics.items())},
+        },
+    )
+
+
+main = hydra_command(train, "train", "prg-train")
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,128 @@
+"""`prg-train`: MLflow records, checkpoints, resume, sweeps, bad input — real SQLite stores."""
+
+from pathlib import Path
+
+import pytest
+import torch
+from mlflow import MlflowClient
+
+from prg.cli import compose_config
+from prg.tracking import sqlite_uri
+from prg.train import train
+from tests.conftest import run_cli
+
+FAST = [
+    "trainer.max_epochs=2",
+    "trainer.limit_train_batches=3",
+    "trainer.limit_val_batches=2",
+    "trainer.enable_progress_bar=false",
+    "callbacks.figures.every_n_epochs=1",
+    "callbacks.figures.n_examples=4",
+]
+
+
+def _cfg(tmp_path: Path, data_dir: Path, *overrides: str):
+    return compose_config(
+        "train", [f"paths.root_dir={tmp_path}", f"paths.data_dir={data_dir}", *FAST, *overrides]
+    )
+
+
+def _client(root: Path) -> MlflowClient:
+    return MlflowClient(sqlite_uri(root / "mlruns.db"))
+
+
+def test_run_records_params_metrics_config_figures_and_checkpoint(tmp_path, small_dataset):
+    result = train(_cfg(tmp_path, small_dataset, "model=avae_ts"))
+    client = _client(tmp_path)
+    run = client.get_run(result.run_id)
+    assert run.data.params["model.name"] == "avae_ts"
+    assert run.data.params["model.module.optimizer.lr"] == "0.0001"
+    assert run.data.tags["prg.family"] == "avae_ts"
+    assert run.data.tags["prg.data.source"] == "synthetic"
+    assert len(run.data.tags["prg.data.manifest_sha256"]) == 64
+    assert run.data.tags["prg.git_commit"]
+    history = client.get_metric_history(result.run_id, "train/loss")
+    assert [m.step for m in history] == sorted(m.step for m in history) and len(history) == 2
+    for name in ("val/loss", "train/rec_traj", "train/kl_label", "train/skl"):
+        assert name in run.data.metrics
+    artifacts = {a.path for a in client.list_artifacts(result.run_id, "figures/final")}
+    assert {"figures/final/label_to_traj.png", "figures/final/recon_traj.png"} <= artifacts
+    assert [a.path for a in client.list_artifacts(result.run_id, "config")] == [
+        "config/config.yaml"
+    ]
+    assert [a.path for a in client.list_artifacts(result.run_id, "checkpoints")] == [
+        "checkpoints/best.ckpt"
+    ]
+    ckpt_dir = tmp_path / "checkpoints/prg/avae_ts-seed0"
+    assert {p.name for p in ckpt_dir.iterdir()} == {"best.ckpt", "last.ckpt"}
+
+
+def test_resume_from_last_checkpoint_continues_the_same_run(tmp_path, small_dataset):
+    first = train(_cfg(tmp_path, small_dataset, "model=cvae", "trainer.max_epochs=1"))
+    last = tmp_path / "checkpoints/prg/cvae-seed0/last.ckpt"
+    assert torch.load(last, weights_only=False)["mlflow_run_id"] == first.run_id
+    second = train(_cfg(tmp_path, small_dataset, "model=cvae", "trainer.max_epochs=2",
+                        f"ckpt_path={last}"))
+    assert second.run_id == first.run_id
+    client = _client(tmp_path)
+    assert len(client.search_runs([client.get_experiment_by_name("prg").experiment_id])) == 1
+    epochs = [m.value for m in client.get_metric_history(first.run_id, "epoch")]
+    assert sorted(set(epochs)) == [0.0, 1.0]
+    assert len(client.get_metric_history(first.run_id, "train/loss")) == 2
+
+
+def test_same_seed_same_first_epoch_losses(tmp_path, small_dataset):
+    a = train(_cfg(tmp_path / "a", small_dataset, "model=cvae", "trainer.max_epochs=1"))
+    b = train(_cfg(tmp_path / "b", small_dataset, "model=cvae", "trainer.max_epochs=1"))
+    assert a.metrics["train/loss"] == b.metrics["train/loss"]
+    assert a.metrics["val/loss"] == b.metrics["val/loss"]
+
+
+@pytest.mark.parametrize("launcher", ["basic", "joblib"])
+def test_multirun_jobs_land_under_one_parent_run(tmp_path, small_dataset, launcher):
+    args = ["-m", "model=cvae,avae_ts", f"paths.root_dir={tmp_path}",
+            f"paths.data_dir={small_dataset}", *FAST, "trainer.max_epochs=1"]
+    if launcher == "joblib":
+        args += ["hydra/launcher=joblib", "hydra.launcher.n_jobs=2"]
+    result = run_cli("prg-train", *args, timeout=600)
+    assert result.returncode == 0, result.stderr[-3000:]
+    client = _client(tmp_path)
+    runs = client.search_runs([client.get_experiment_by_name("prg").experiment_id])
+    parents = [r for r in runs if r.data.tags.get("prg.sweep") == "parent"]
+    children = [r for r in runs if r.data.tags.get("mlflow.parentRunId")]
+    assert len(parents) == 1 and len(children) == 2
+    assert {c.data.tags["mlflow.parentRunId"] for c in children} == {parents[0].info.run_id}
+    assert {c.data.tags["prg.family"] for c in children} == {"cvae", "avae_ts"}
+    assert all(c.info.status == "FINISHED" for c in children)
+
+
+BAD = [
+    (["model=transformer"], "transformer"),
+    (["ckpt_path=/no/such.ckpt"], "does not exist"),
+    (["ckpt_path={text}"], "not a readable checkpoint"),
+    (["model=avae_ti", "data.loader.modalities=[traj,label]"], "image"),
+    (["trainer.max_epochs=banana"], "max_epochs"),
+]
+
+
+@pytest.mark.parametrize("args, expected", BAD, ids=[" ".join(a) for a, _ in BAD])
+def test_bad_input_gets_one_line_and_exit_2(tmp_path, small_dataset, args, expected):
+    text = tmp_path / "notes.ckpt"
+    text.write_text("not a checkpoint")
+    args = [a.format(text=text) for a in args]
+    result = run_cli("prg-train", f"paths.root_dir={tmp_path}",
+                     f"paths.data_dir={small_dataset}", *FAST, *args)
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode == 2, result.stderr[-2000:]
+    assert len(lines) == 1 and lines[0].startswith("prg-train: error:"), lines
+    assert expected in lines[0]
+    assert "Traceback" not in result.stderr
+
+
+def test_checkpoint_of_another_family_is_refused(tmp_path, small_dataset):
+    train(_cfg(tmp_path, small_dataset, "model=cvae", "trainer.max_epochs=1"))
+    ckpt = tmp_path / "checkpoints/prg/cvae-seed0/last.ckpt"
+    result = run_cli("prg-train", "model=avae_ts", f"ckpt_path={ckpt}",
+                     f"paths.root_dir={tmp_path}", f"paths.data_dir={small_dataset}", *FAST)
+    assert result.returncode == 2
+    assert "holds a prg.models.cvae.CVAE model" in result.stderr
