@@ -26,12 +26,12 @@ $(STAMP): pyproject.toml | $(BIN)/python
 
 setup: $(STAMP) ## Create .venv and install torch (CPU) and the project with its extras (idempotent)
 
-demo: setup ## Run the pipeline (dvc repro): the synthetic dataset and its figures
+demo: setup ## Run the whole pipeline (dvc repro): dataset, then the four models (quick profile)
 	dvc repro
 	@echo
-	@echo "Dataset:  data/prepared/synthetic/ (train/val/test.npz, manifest.json)"
-	@echo "Figures:  data/prepared/synthetic/figures/*.png"
-	@echo "Metrics:  reports/prepare/synthetic/metrics.json  (dvc metrics show)"
+	@echo "Dataset:  data/prepared/synthetic/ (train/val/test.npz, manifest.json, figures/)"
+	@echo "Models:   models/<family>/model.ckpt and metrics.json  (dvc metrics show)"
+	@echo "Runs:     mlflow ui --backend-store-uri sqlite:///mlruns.db   (then http://127.0.0.1:5000)"
 
 test: setup ## Run the default test suite (fast; no `slow` tests)
 	$(BIN)/pytest -m "not slow" -n 2 -q

@@ -61,8 +61,9 @@ def test_resume_from_last_checkpoint_continues_the_same_run(tmp_path, small_data
     first = train(_cfg(tmp_path, small_dataset, "model=cvae", "trainer.max_epochs=1"))
     last = tmp_path / "checkpoints/prg/cvae-seed0/last.ckpt"
     assert torch.load(last, weights_only=False)["mlflow_run_id"] == first.run_id
-    second = train(_cfg(tmp_path, small_dataset, "model=cvae", "trainer.max_epochs=2",
-                        f"ckpt_path={last}"))
+    second = train(
+        _cfg(tmp_path, small_dataset, "model=cvae", "trainer.max_epochs=2", f"ckpt_path={last}")
+    )
     assert second.run_id == first.run_id
     client = _client(tmp_path)
     assert len(client.search_runs([client.get_experiment_by_name("prg").experiment_id])) == 1
@@ -80,8 +81,14 @@ def test_same_seed_same_first_epoch_losses(tmp_path, small_dataset):
 
 @pytest.mark.parametrize("launcher", ["basic", "joblib"])
 def test_multirun_jobs_land_under_one_parent_run(tmp_path, small_dataset, launcher):
-    args = ["-m", "model=cvae,avae_ts", f"paths.root_dir={tmp_path}",
-            f"paths.data_dir={small_dataset}", *FAST, "trainer.max_epochs=1"]
+    args = [
+        "-m",
+        "model=cvae,avae_ts",
+        f"paths.root_dir={tmp_path}",
+        f"paths.data_dir={small_dataset}",
+        *FAST,
+        "trainer.max_epochs=1",
+    ]
     if launcher == "joblib":
         args += ["hydra/launcher=joblib", "hydra.launcher.n_jobs=2"]
     result = run_cli("prg-train", *args, timeout=600)
@@ -110,8 +117,9 @@ def test_bad_input_gets_one_line_and_exit_2(tmp_path, small_dataset, args, expec
     text = tmp_path / "notes.ckpt"
     text.write_text("not a checkpoint")
     args = [a.format(text=text) for a in args]
-    result = run_cli("prg-train", f"paths.root_dir={tmp_path}",
-                     f"paths.data_dir={small_dataset}", *FAST, *args)
+    result = run_cli(
+        "prg-train", f"paths.root_dir={tmp_path}", f"paths.data_dir={small_dataset}", *FAST, *args
+    )
     lines = result.stderr.strip().splitlines()
     assert result.returncode == 2, result.stderr[-2000:]
     assert len(lines) == 1 and lines[0].startswith("prg-train: error:"), lines
@@ -122,7 +130,22 @@ def test_bad_input_gets_one_line_and_exit_2(tmp_path, small_dataset, args, expec
 def test_checkpoint_of_another_family_is_refused(tmp_path, small_dataset):
     train(_cfg(tmp_path, small_dataset, "model=cvae", "trainer.max_epochs=1"))
     ckpt = tmp_path / "checkpoints/prg/cvae-seed0/last.ckpt"
-    result = run_cli("prg-train", "model=avae_ts", f"ckpt_path={ckpt}",
-                     f"paths.root_dir={tmp_path}", f"paths.data_dir={small_dataset}", *FAST)
+    result = run_cli(
+        "prg-train",
+        "model=avae_ts",
+        f"ckpt_path={ckpt}",
+        f"paths.root_dir={tmp_path}",
+        f"paths.data_dir={small_dataset}",
+        *FAST,
+    )
     assert result.returncode == 2
     assert "holds a prg.models.cvae.CVAE model" in result.stderr
+
+
+def test_paper_profile_registers_the_best_checkpoint(tmp_path, small_dataset):
+    result = train(_cfg(tmp_path, small_dataset, "model=cvae", "experiment=paper", *FAST))
+    client = _client(tmp_path)
+    versions = client.search_model_versions("name='prg-cvae'")
+    assert len(versions) == 1 and versions[0].run_id == result.run_id
+    assert versions[0].source.endswith("checkpoints/best.ckpt")
+    assert client.get_run(result.run_id).data.tags["prg.experiment"] == "paper"

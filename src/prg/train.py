@@ -121,6 +121,19 @@ def _manifest(cfg: DictConfig) -> tuple[dict[str, Any], str]:
 
 def train(cfg: DictConfig) -> TrainResult:
     """Task: fit ``cfg.model`` on ``cfg.data`` with MLflow tracking and fixed-path checkpoints."""
+    # mlflow.set_tracking_uri (called by Lightning's logger) exports MLFLOW_TRACKING_URI; keep
+    # that from leaking into later runs of the same process (tests, notebooks, sweeps).
+    saved = os.environ.get("MLFLOW_TRACKING_URI")
+    try:
+        return _train(cfg)
+    finally:
+        if saved is None:
+            os.environ.pop("MLFLOW_TRACKING_URI", None)
+        else:
+            os.environ["MLFLOW_TRACKING_URI"] = saved
+
+
+def _train(cfg: DictConfig) -> TrainResult:
     _check_modalities(cfg)
     _check_numbers(cfg)
     manifest, manifest_hash = _manifest(cfg)

@@ -45,6 +45,8 @@ class PRGModule(L.LightningModule):
             {"model": model, "optimizer": optimizer, "beta_warmup_epochs": beta_warmup_epochs}
         )
         self.model: MultimodalVAE = instantiate(model, _convert_="all")
+        self._sums: dict[str, dict[str, torch.Tensor]] = {}
+        self._counts: dict[str, int] = {}
         if beta_warmup_epochs < 0:
             raise UsageError(f"beta_warmup_epochs must be >= 0, got {beta_warmup_epochs}")
 
@@ -61,23 +63,38 @@ class PRGModule(L.LightningModule):
             self.model.beta_scale = min(1.0, (self.current_epoch + 1) / warmup) if warmup else 1.0
 
     def _step(self, batch: dict[str, torch.Tensor], split: str) -> torch.Tensor:
+        # Terms are summed here and logged once per epoch (_log_epoch): Lightning's per-call
+        # logging cost about 10 % of a small model's step (benchmarks/bench_train.py).
         terms = self.model.elbo(batch)
         size = len(next(iter(batch.values())))
-        self.log_dict(
-            {f"{split}/{k}": v.detach() for k, v in terms.items() if k != "loss"},
-            on_step=False,
-            on_epoch=True,
-            batch_size=size,
-        )
-        self.log(
-            f"{split}/loss",
-            terms["loss"].detach(),
-            on_step=False,
-            on_epoch=True,
-            prog_bar=True,
-            batch_size=size,
-        )
+        sums = self._sums.setdefault(split, {})
+        for key, value in terms.items():
+            sums[key] = sums.get(key, 0.0) + value.detach() * size
+        self._counts[split] = self._counts.get(split, 0) + size
         return terms["loss"]
+
+    def _log_epoch(self, split: str) -> None:
+        sums, count = self._sums.pop(split, {}), self._counts.pop(split, 0)
+        if count:
+            self.log_dict({f"{split}/{k}": v / count for k, v in sums.items() if k != "loss"})
+            self.log(f"{split}/loss", sums["loss"] / count, prog_bar=True)
+
+    def on_train_epoch_end(self) -> None:
+        self._log_epoch("train")
+
+    def on_validation_epoch_end(self) -> None:
+        self._log_epoch("val")
+
+    def on_test_epoch_end(self) -> None:
+        self._log_epoch("test")
+
+    def on_save_checkpoint(self, checkpoint: dict[str, Any]) -> None:
+        if hasattr(self.model, "beta_scale"):  # a plain attribute, not in the state dict
+            checkpoint["beta_scale"] = float(self.model.beta_scale)
+
+    def on_load_checkpoint(self, checkpoint: dict[str, Any]) -> None:
+        if hasattr(self.model, "beta_scale") and "beta_scale" in checkpoint:
+            self.model.beta_scale = checkpoint["beta_scale"]
 
     def training_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> torch.Tensor:
         return self._step(batch, "train")
