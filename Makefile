@@ -49,6 +49,7 @@ format: setup ## Format and fix with ruff
 
 bench: setup ## Run the benchmarks (tables printed, JSON under benchmarks/results/)
 	$(BIN)/python benchmarks/bench_prepare.py
+	$(BIN)/python benchmarks/bench_train.py
 
 clean: ## Remove caches (keeps .venv, data and runs)
 	rm -rf .pytest_cache .ruff_cache .hypothesis
