@@ -13,7 +13,7 @@ def _small_repo(tmp_path: Path) -> Path:
     """A git+DVC copy of the project's pipeline files with a small data config."""
     repo = tmp_path / "repo"
     ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
-    for item in ("conf", "src", ".dvc", "dvc.yaml", ".dvcignore"):
+    for item in ("conf", "src", ".dvc", "dvc.yaml", ".dvcignore", "params.yaml"):
         src = REPO / item
         if src.is_dir():
             shutil.copytree(src, repo / item, ignore=ignore)

@@ -18,35 +18,39 @@ def _pyplot():
     return plt
 
 
-def trajectory_grid(trajs: np.ndarray, titles: list[str], cols: int = 16, title: str = ""):
-    """Trajectories (N, 200) interleaved x, y -> a grid of small line plots."""
+def _grid(items, titles: list[str], cols: int, title: str, cell: tuple[float, float], draw):
+    """One small axes per item, ``draw(ax, item)`` in each, titles above."""
     plt = _pyplot()
-    rows = -(-len(trajs) // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(cols * 0.7, rows * 0.8), squeeze=False)
+    rows = -(-len(items) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(cols * cell[0], rows * cell[1]), squeeze=False)
     for ax in axes.flat:
         ax.set_axis_off()
-    for ax, traj, name in zip(axes.flat, trajs, titles):
-        pts = np.asarray(traj).reshape(-1, 2)
-        ax.plot(pts[:, 0], pts[:, 1], lw=0.9, color="black")
-        ax.plot(pts[0, 0], pts[0, 1], "o", ms=1.5, color="tab:red")
-        ax.set_aspect("equal")
+    for ax, item, name in zip(axes.flat, items, titles):
+        draw(ax, np.asarray(item))
         ax.set_title(name, fontsize=7)
     fig.suptitle(title, fontsize=9)
     return fig
+
+
+def _draw_trajectory(ax, traj: np.ndarray) -> None:
+    pts = traj.reshape(-1, 2)
+    ax.plot(pts[:, 0], pts[:, 1], lw=0.9, color="black")
+    ax.plot(pts[0, 0], pts[0, 1], "o", ms=1.5, color="tab:red")
+    ax.set_aspect("equal")
+
+
+def _draw_image(ax, image: np.ndarray) -> None:
+    ax.imshow(image.reshape(28, 28), cmap="gray_r", vmin=0, vmax=1)
+
+
+def trajectory_grid(trajs: np.ndarray, titles: list[str], cols: int = 16, title: str = ""):
+    """Trajectories (N, 200) interleaved x, y -> a grid of small line plots."""
+    return _grid(trajs, titles, cols, title, (0.7, 0.8), _draw_trajectory)
 
 
 def image_grid(images: np.ndarray, titles: list[str], cols: int = 16, title: str = ""):
     """Images (N, 1, 28, 28) in [0, 1] -> a grid."""
-    plt = _pyplot()
-    rows = -(-len(images) // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(cols * 0.6, rows * 0.7), squeeze=False)
-    for ax in axes.flat:
-        ax.set_axis_off()
-    for ax, img, name in zip(axes.flat, images, titles):
-        ax.imshow(np.asarray(img).reshape(28, 28), cmap="gray_r", vmin=0, vmax=1)
-        ax.set_title(name, fontsize=7)
-    fig.suptitle(title, fontsize=9)
-    return fig
+    return _grid(images, titles, cols, title, (0.6, 0.7), _draw_image)
 
 
 @torch.no_grad()
