@@ -1,0 +1,1 @@
+"""Evaluation: importance-weighted log-likelihoods (Table I), coherence, robustness."""
