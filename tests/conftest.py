@@ -61,3 +61,20 @@ def letter_like(rng: np.random.Generator, n: int = 60) -> np.ndarray:
         * np.sin(2 * np.pi * freqs[:, None, :] * t[None, :, None] + phases[:, None, :])
     ).sum(-1)
     return pts.T * rng.uniform(10, 500)
+
+
+def writer_variation(pts: np.ndarray, u: np.ndarray, rng: np.random.Generator, amount: float):
+    """A writer-like variation of a curve sampled at ``u``: a random affine map plus a
+    low-frequency wobble; returns 100 normalised equidistant points."""
+    from prg.data.preprocess import normalise, resample_arclength
+
+    if pts.shape[0] != u.shape[0]:
+        pts = resample_arclength(pts, u.shape[0])
+    pts = pts @ (np.eye(2) + rng.normal(0, amount, (2, 2))).T
+    k = np.arange(1, 4)
+    for d in range(2):
+        wobble = rng.normal(0, amount / 2, 3) * np.sin(
+            np.pi * k * u[:, None] + rng.uniform(0, 3, 3)
+        )
+        pts[:, d] += wobble.sum(axis=1)
+    return normalise(resample_arclength(pts, 100))

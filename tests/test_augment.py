@@ -11,6 +11,7 @@ from prg.data import sigma_lognormal as sl
 from prg.data.augment import AugmentResult, augment, fit_quality_summary, fit_trajectory
 from prg.data.preprocess import normalise, resample_arclength
 from prg.errors import UsageError
+from tests.conftest import writer_variation
 
 # ----------------------------------------------------------------------------------------------
 # Ten letter-like classes, several jittered "writers" each (made here, no data generator)
@@ -53,17 +54,7 @@ CLASSES = {
 
 def _jittered(name: str, rng: np.random.Generator, amount: float = 0.07) -> np.ndarray:
     u = np.linspace(0.0, 1.0, 400)
-    pts = CLASSES[name](u)
-    if pts.shape[0] != u.shape[0]:
-        pts = resample_arclength(pts, u.shape[0])
-    pts = pts @ (np.eye(2) + rng.normal(0, amount, (2, 2))).T
-    k = np.arange(1, 4)
-    for d in range(2):
-        wobble = rng.normal(0, amount / 2, 3) * np.sin(
-            np.pi * k * u[:, None] + rng.uniform(0, 3, 3)
-        )
-        pts[:, d] += wobble.sum(axis=1)
-    return normalise(resample_arclength(pts, 100))
+    return writer_variation(CLASSES[name](u), u, rng, amount)
 
 
 def dataset(per_class: int = 4, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:

@@ -13,6 +13,7 @@ from scipy.special import erf
 
 from prg.data import sigma_lognormal as sl
 from prg.data.preprocess import normalise, resample_arclength
+from tests.conftest import writer_variation
 
 # ----------------------------------------------------------------------------------------------
 # Test shapes: letter-like strokes, made here (no dependency on any data generator)
@@ -66,15 +67,7 @@ def prepare(points: np.ndarray, n: int = 100) -> np.ndarray:
 def jittered(name: str, rng: np.random.Generator, amount: float = 0.08) -> np.ndarray:
     """A writer-like variation of a shape: random affine map plus low-frequency wobble."""
     u = np.linspace(0.0, 1.0, 400)
-    pts = SHAPES[name](u)
-    pts = pts @ (np.eye(2) + rng.normal(0, amount, (2, 2))).T
-    k = np.arange(1, 4)
-    for d in range(2):
-        wobble = rng.normal(0, amount / 2, 3) * np.sin(
-            np.pi * k * u[:, None] + rng.uniform(0, 3, 3)
-        )
-        pts[:, d] += wobble.sum(axis=1)
-    return prepare(pts)
+    return writer_variation(SHAPES[name](u), u, rng, amount)
 
 
 def random_smooth(rng: np.random.Generator, n_ctrl: int = 6) -> np.ndarray:
