@@ -428,14 +428,14 @@ def test_muse_subset_matching_term_is_the_mean_skl_over_the_six_proper_subsets(m
 
 # ---- importance paths ----------------------------------------------------------------------
 PATHS = [
-    ("cvae", "traj", ("traj", "label"), 16),
-    ("avae_ts", "traj", ("traj",), 16),
-    ("avae_ts", "label", ("label",), 16),
+    ("cvae", "traj", ("label",), 16),
+    ("avae_ts", "traj", (), 16),
+    ("avae_ts", "label", (), 16),
     ("avae_ts", "traj", ("label",), 16),
-    ("avae_ti", "image", ("image",), 16),
+    ("avae_ti", "image", (), 16),
     ("avae_ti", "traj", ("image",), 16),
-    ("muse", "traj", ("traj",), 16),
-    ("muse", "image", ("image",), 16),
+    ("muse", "traj", (), 16),
+    ("muse", "image", (), 16),
     ("muse", "traj", ("label",), 8),
     ("muse", "traj", ("label", "image"), 8),
     ("muse", "image", ("traj",), 8),
@@ -450,7 +450,8 @@ def test_importance_path_has_the_right_latent_dim_and_gives_finite_weights(
     model = make_model(family).eval()
     data = make_batch(3, seed=2)
     with torch.no_grad():
-        path = model.importance_path(target, {m: data[m] for m in given})
+        assert (target, given) in model.likelihood_cells
+        path = model.importance_path(target, data[target], {m: data[m] for m in given})
         assert path.target == target
         assert path.latent_dim == dim
         assert path.proposal.mu.shape == (3, dim)
@@ -467,9 +468,22 @@ def test_importance_path_has_the_right_latent_dim_and_gives_finite_weights(
     assert torch.isfinite(w).all()
 
 
-def test_cvae_has_no_marginal_importance_path():
-    with pytest.raises(ValueError, match="log p\\(x_T \\| x_S\\) only"):
-        make_model("cvae").importance_path("traj", make_batch(2, modalities=("traj",)))
+@pytest.mark.parametrize(
+    ("family", "target", "given"),
+    [
+        ("cvae", "traj", ()),
+        ("cvae", "label", ("traj",)),
+        ("avae_ts", "image", ()),
+        ("avae_ts", "traj", ("traj",)),
+        ("avae_ti", "traj", ("label",)),
+        ("muse", "traj", ("traj", "label")),
+    ],
+)
+def test_a_cell_the_family_cannot_estimate_is_refused_with_what_it_can(family, target, given):
+    model = make_model(family)
+    data = make_batch(2, seed=1)
+    with pytest.raises(UsageError, match=f"{family} cannot estimate log p.*it estimates"):
+        model.importance_path(target, data[target], {m: data[m] for m in given})
 
 
 # ---- Lightning module ----------------------------------------------------------------------

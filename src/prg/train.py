@@ -18,7 +18,6 @@ from pathlib import Path
 from typing import Any
 
 import lightning as L
-import torch
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
@@ -26,6 +25,7 @@ from prg.cli import hydra_command
 from prg.data.build import git_commit, write_json
 from prg.data.datamodule import PRGDataModule
 from prg.errors import UsageError
+from prg.models.checkpoint import read_checkpoint
 from prg.models.module import PRGModule
 from prg.tracking import PARENT_ENV, artifact_location, file_sha256, flatten, tracking_uri
 
@@ -42,22 +42,6 @@ class TrainResult:
     run_id: str | None
     best_checkpoint: str
     last_checkpoint: str
-
-
-def read_checkpoint(path: str | os.PathLike) -> dict[str, Any]:
-    """Load a Lightning checkpoint's dict, or raise a UsageError naming the file."""
-    path = Path(path)
-    if not path.is_file():
-        raise UsageError(f"checkpoint {path} does not exist")
-    try:
-        ckpt = torch.load(path, map_location="cpu", weights_only=False)
-    except Exception as err:  # torch raises many types for a file that is not a checkpoint
-        raise UsageError(
-            f"checkpoint {path} is not a readable checkpoint ({type(err).__name__})"
-        ) from None
-    if not isinstance(ckpt, dict) or "state_dict" not in ckpt or "hyper_parameters" not in ckpt:
-        raise UsageError(f"checkpoint {path} is not a prg training checkpoint")
-    return ckpt
 
 
 def _check_modalities(cfg: DictConfig) -> None:

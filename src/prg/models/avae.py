@@ -74,10 +74,9 @@ class AVAE(MultimodalVAE):
         terms["loss"] = loss + self.alpha * skl
         return terms
 
-    def importance_path(self, target: str, given: Inputs) -> ImportancePath:
-        """Marginal (given = {target: x}) or conditional (given = {other: x}) path: proposal
-        q_given(z | x_given), decoder of the target."""
-        self.check_inputs(given)
-        return ImportancePath(
-            self.encode(given), lambda z: self.decoders[target](z), target, self.latent_dim
-        )
+    def importance_path(self, target: str, x_target: torch.Tensor, given: Inputs) -> ImportancePath:
+        """Marginal (``given`` empty): proposal q_target(z | x_target); conditional (one given
+        modality b): proposal q_b(z | x_b). Either way decoded by the target's decoder."""
+        self.check_cell(target, given)
+        proposal = self.encode(given or {target: x_target})
+        return ImportancePath(proposal, self.decoders[target], target, self.latent_dim)

@@ -10,7 +10,8 @@ Batches and inputs are dicts keyed by modality (``traj`` (B, 200), ``label`` (B,
 - :meth:`MultimodalVAE.elbo` — the training loss and its named terms, averaged over the batch;
 - :meth:`MultimodalVAE.importance_path` — what an importance-weighted log-likelihood estimator
   needs for ``log p(x_target | x_given)`` (proposal, prior, decoder), so the estimator is written
-  once for all families.
+  once for all families; :attr:`MultimodalVAE.likelihood_cells` lists the (target, given) pairs a
+  family can estimate.
 """
 
 from __future__ import annotations
@@ -93,8 +94,11 @@ class MultimodalVAE(nn.Module, ABC):
         """Loss terms averaged over the batch; ``loss`` is the total to minimise."""
 
     @abstractmethod
-    def importance_path(self, target: str, given: Inputs) -> ImportancePath:
-        """Proposal and decoder for ``log p(x_target | given)`` (``given`` may be empty)."""
+    def importance_path(self, target: str, x_target: torch.Tensor, given: Inputs) -> ImportancePath:
+        """Proposal and decoder for ``log p(x_target | given)``; ``given`` empty: the marginal.
+
+        Raises a :class:`~prg.errors.UsageError` for a pair not in :attr:`likelihood_cells`.
+        """
 
     # ---- shared behaviour ----------------------------------------------------------------
     @property
@@ -108,6 +112,27 @@ class MultimodalVAE(nn.Module, ABC):
     def generated_modalities(self) -> tuple[str, ...]:
         """Modalities :meth:`generate` can produce (default: all it models)."""
         return self.modalities
+
+    @property
+    def likelihood_cells(self) -> list[tuple[str, tuple[str, ...]]]:
+        """(target, given modalities) pairs :meth:`importance_path` supports (default: every
+        marginal, and every target given any accepted subset that leaves the target out)."""
+        marginals = [(m, ()) for m in self.modalities]
+        conditionals = [(m, s) for m in self.modalities for s in self.accepted_inputs if m not in s]
+        return marginals + conditionals
+
+    def check_cell(self, target: str, given: Inputs) -> None:
+        """Raise a UsageError unless ``log p(x_target | given)`` is one of this family's cells."""
+        cell = (target, tuple(m for m in MODALITIES if m in given))
+        if cell not in self.likelihood_cells:
+
+            def name(t, g):
+                return f"log p(x_{LETTER.get(t, t)}" + (
+                    f" | x_{''.join(LETTER.get(m, m) for m in g)})" if g else ")"
+                )
+
+            cells = ", ".join(name(*c) for c in self.likelihood_cells)
+            raise UsageError(f"{self.family} cannot estimate {name(*cell)}: it estimates {cells}")
 
     def accepts(self, inputs: Inputs) -> bool:
         return tuple(m for m in self.modalities if m in inputs) in self.accepted_inputs and all(

@@ -58,12 +58,14 @@ class CVAE(MultimodalVAE):
         terms["elbo"] = -(terms["rec_traj"] + terms["kl"])
         return terms
 
-    def importance_path(self, target: str, given: Inputs) -> ImportancePath:
+    likelihood_cells: ClassVar[list[tuple[str, tuple[str, ...]]]] = [("traj", ("label",))]
+
+    def importance_path(self, target: str, x_target: torch.Tensor, given: Inputs) -> ImportancePath:
         """log p(x_T | y): proposal q(z | x_T, y), decoder with y (as the reference code)."""
-        if target != "traj" or set(given) != {"traj", "label"}:
-            raise ValueError("the CVAE estimates log p(x_T | x_S) only (given traj and label)")
+        self.check_cell(target, given)
+        inputs = {"traj": x_target, "label": given["label"]}
         return ImportancePath(
-            self.encode(given),
+            self.encode(inputs),
             lambda z: self.decode(z, "traj", _repeat(given, z)),
             "traj",
             self.latent_dim,

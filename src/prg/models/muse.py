@@ -139,15 +139,15 @@ class MUSE(MultimodalVAE):
         terms["loss"] = loss + self.delta * skl
         return terms
 
-    def importance_path(self, target: str, given: Inputs) -> ImportancePath:
-        """Marginal log p(x_m): given = {m: x_m} uses the bottom VAE of m (proposal q(z_m | x_m),
+    def importance_path(self, target: str, x_target: torch.Tensor, given: Inputs) -> ImportancePath:
+        """Marginal log p(x_m) (``given`` empty) uses the bottom VAE of m (proposal q(z_m | x_m),
         decoder g_m, latent 16). Conditional log p(x_a | x_S): proposal q(c | x_S) from the
         given subset, decoder g_a(d_a(c)), latent 8 (the reference code's estimator)."""
-        self.check_inputs(given)
-        if set(given) == {target}:
-            mu, logvar = self.encoders[target](given[target])
+        self.check_cell(target, given)
+        if not given:
+            mu, logvar = self.encoders[target](x_target)
             return ImportancePath(
-                Gaussian(mu, logvar), lambda z: self.decoders[target](z), target, self.latent_dim
+                Gaussian(mu, logvar), self.decoders[target], target, self.latent_dim
             )
         return ImportancePath(
             self.encode(given), lambda c: self.decode(c, target), target, self.top_latent_dim
