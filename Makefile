@@ -26,11 +26,12 @@ $(STAMP): pyproject.toml | $(BIN)/python
 
 setup: $(STAMP) ## Create .venv and install torch (CPU) and the project with its extras (idempotent)
 
-demo: setup ## Run the whole pipeline (dvc repro): dataset, then the four models (quick profile)
+demo: setup ## Run the whole pipeline (dvc repro): dataset, four models (quick profile), evaluation
 	dvc repro
 	@echo
 	@echo "Dataset:  data/prepared/synthetic/ (train/val/test.npz, manifest.json, figures/)"
 	@echo "Models:   models/<family>/model.ckpt and metrics.json  (dvc metrics show)"
+	@echo "Reports:  reports/table1.md, reports/coherence.md, reports/robustness.md, reports/figures/"
 	@echo "Runs:     mlflow ui --backend-store-uri sqlite:///mlruns.db   (then http://127.0.0.1:5000)"
 
 test: setup ## Run the default test suite (fast; no `slow` tests)
@@ -50,6 +51,7 @@ format: setup ## Format and fix with ruff
 bench: setup ## Run the benchmarks (tables printed, JSON under benchmarks/results/)
 	$(BIN)/python benchmarks/bench_prepare.py
 	$(BIN)/python benchmarks/bench_train.py
+	$(BIN)/python benchmarks/bench_evaluate.py
 
 clean: ## Remove caches (keeps .venv, data and runs)
 	rm -rf .pytest_cache .ruff_cache .hypothesis

@@ -1,0 +1,188 @@
+"""`prg-evaluate`: Table I, coherence and robustness reports from real (tiny) trained models,
+written atomically, logged to a real SQLite MLflow store; bad input gets one line."""
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+from mlflow import MlflowClient
+
+from prg.cli import compose_config
+from prg.evaluate import evaluate
+from prg.evaluation.coherence import coherence_cells, per_class_rate
+from prg.evaluation.likelihood import TABLE1_CELLS, estimate_cell
+from prg.evaluation.reports import PAPER_TABLE1
+from prg.models.checkpoint import load_model
+from prg.tracking import sqlite_uri
+from prg.train import train
+from tests.conftest import run_cli
+
+FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse")
+TINY = [
+    "likelihood.k_marginal=4",
+    "likelihood.k_conditional=6",
+    "likelihood.n_test=12",
+    "classifier.epochs=1",
+    "progress=false",
+]
+
+
+@pytest.fixture(scope="module")
+def trained_root(tmp_path_factory, small_dataset) -> Path:
+    """A project root whose models/<family>/model.ckpt hold briefly trained models."""
+    root = tmp_path_factory.mktemp("root")
+    for family in FAMILIES:
+        cfg = compose_config(
+            "train",
+            [
+                f"paths.root_dir={root}",
+                f"paths.data_dir={small_dataset}",
+                f"model={family}",
+                "trainer.max_epochs=1",
+                "trainer.limit_train_batches=2",
+                "trainer.limit_val_batches=1",
+                "trainer.enable_progress_bar=false",
+                "callbacks.figures.every_n_epochs=100",
+                f"export_dir={root}/models/{family}",
+            ],
+        )
+        train(cfg)
+    return root
+
+
+def _cfg(root: Path, data_dir: Path, *overrides: str):
+    return compose_config(
+        "evaluate", [f"paths.root_dir={root}", f"paths.data_dir={data_dir}", *TINY, *overrides]
+    )
+
+
+def test_reports_tables_figures_and_mlflow(trained_root, small_dataset):
+    result = evaluate(_cfg(trained_root, small_dataset))
+    reports = trained_root / "reports"
+    models = {f: load_model(trained_root / f"models/{f}/model.ckpt")[0] for f in FAMILIES}
+
+    # Table I: each family fills exactly the cells it supports, which are the paper's cells
+    cells = {(r["model"], r["cell"]) for r in result.table1}
+    for family, model in models.items():
+        mine = {c for m, c in cells if m == family}
+        assert mine == {c for c, cell in TABLE1_CELLS.items() if cell in model.likelihood_cells}
+        assert mine == set(PAPER_TABLE1[family])
+    assert all(math.isfinite(r["value"]) and r["n_test"] == 12 for r in result.table1)
+    assert {r["k"] for r in result.table1 if "_given_" in r["cell"]} == {6}
+    with open(reports / "table1.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == len(result.table1)
+    assert float(rows[0]["value"]) == pytest.approx(result.table1[0]["value"], rel=1e-5)
+    table = (reports / "table1.md").read_text()
+    assert "(-192.75)" in table and "PRG_MUSE(T,S,I)" in table and "Density convention" in table
+
+    # coherence: every subset x target x kind; MUSE has 7 subsets and 3 targets
+    muse = [r for r in result.coherence if r["model"] == "muse"]
+    assert len(muse) == 7 * 3 * 2
+    assert all(0.0 <= r["coherence"] <= 1.0 for r in result.coherence)
+    cvae = {(r["target"], r["given"]) for r in result.coherence if r["model"] == "cvae"}
+    assert cvae == {("traj", "S"), ("traj", "T,S")}
+    robustness = (reports / "robustness.md").read_text()
+    assert "{S,I}" in robustness and "{T,S,I}*" in robustness
+    assert "# Missing-modality robustness" in robustness
+    assert "test accuracy" in (reports / "coherence.md").read_text()
+    figures = {p.name for p in (reports / "figures").iterdir()}
+    assert {"muse_T_given_S.png", "muse_I_given_T.png", "muse_coherence_per_class.png"} <= figures
+
+    # metrics.json and MLflow: test metrics in each model's training run, reports as artifacts
+    metrics = json.loads((reports / "metrics.json").read_text())
+    assert metrics == result.metrics
+    client = MlflowClient(sqlite_uri(trained_root / "mlruns.db"))
+    run_id = json.loads((trained_root / "models/muse/metrics.json").read_text())["mlflow_run_id"]
+    logged = client.get_run(run_id).data.metrics
+    assert logged["test/logp_T_given_S"] == pytest.approx(metrics["muse/logp_T_given_S"])
+    assert logged["test/coherence_T_given_S"] == pytest.approx(metrics["muse/coherence_T_given_S"])
+    experiment = client.get_experiment_by_name("prg").experiment_id
+    (run,) = client.search_runs([experiment], "tags.`prg.task` = 'evaluate'")
+    artifacts = {a.path for a in client.list_artifacts(run.info.run_id, "reports")}
+    assert {"reports/table1.md", "reports/coherence.csv", "reports/robustness.md"} <= artifacts
+    assert not [p for p in reports.iterdir() if p.name.startswith(".evaluate")]
+
+
+def test_estimates_are_deterministic_for_a_seed(trained_root, small_dataset):
+    model, _ = load_model(trained_root / "models/muse/model.ckpt")
+    g = torch.Generator().manual_seed(0)
+    data = {
+        "traj": torch.randn(5, 200, generator=g) * 0.3,
+        "label": torch.randint(0, 62, (5,), generator=g),
+        "image": torch.rand(5, 1, 28, 28, generator=g),
+    }
+    a = estimate_cell(model, "image", ("traj",), data, k=7, batch_size=2, chunk_rows=6, seed=3)
+    b = estimate_cell(model, "image", ("traj",), data, k=7, batch_size=2, chunk_rows=6, seed=3)
+    c = estimate_cell(model, "image", ("traj",), data, k=7, batch_size=2, chunk_rows=6, seed=4)
+    assert torch.equal(a, b)
+    assert not torch.equal(a, c)
+
+
+def test_coherence_cells_follow_what_each_family_accepts(trained_root):
+    for family in FAMILIES:
+        model, _ = load_model(trained_root / f"models/{family}/model.ckpt")
+        cells = coherence_cells(model)
+        assert {given for _, given in cells} == set(model.accepted_inputs)
+        assert {target for target, _ in cells} == set(model.generated_modalities)
+
+
+def test_per_class_rate_matches_a_direct_count():
+    rng = np.random.default_rng(0)
+    labels = rng.integers(0, 5, 200)
+    correct = rng.random(200) < 0.3
+    rates = per_class_rate(torch.from_numpy(correct), torch.from_numpy(labels), 7).numpy()
+    for c in range(5):
+        assert rates[c] == pytest.approx(correct[labels == c].mean())
+    assert np.isnan(rates[5:]).all()
+
+
+def test_classifiers_part_alone(tmp_path, small_dataset):
+    result = run_cli(
+        "prg-evaluate",
+        f"paths.root_dir={tmp_path}",
+        f"paths.data_dir={small_dataset}",
+        "parts=[classifiers]",
+        *TINY,
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    folder = tmp_path / "models/classifiers"
+    assert {"traj.pt", "image.pt", "metrics.json"} <= {p.name for p in folder.iterdir()}
+    assert not (tmp_path / "reports").exists()
+
+
+BAD = [
+    (["models_dir={root}/nowhere"], "does not exist"),
+    (["+checkpoints.muse={root}/models/cvae/model.ckpt"], "holds a cvae model, not muse"),
+    (["+checkpoints.a={root}/models/muse/metrics.json"], "not a readable checkpoint"),
+    (["likelihood.k_marginal=0"], "k_marginal must be an integer >= 1"),
+    (["likelihood.k_conditional=many"], "k_conditional must be an integer >= 1"),
+    (["families=[cvae]", "likelihood.cells=[logp_I]"], "cvae cannot estimate log p(x_I)"),
+    (["likelihood.cells=[logp_X]"], "likelihood.cells"),
+    (["parts=[plots]"], "parts"),
+    (["coherence.temperatures.mean=-1"], "temperatures.mean"),
+]
+
+
+@pytest.mark.parametrize("args, expected", BAD, ids=[" ".join(a) for a, _ in BAD])
+def test_bad_input_gets_one_line_and_exit_2_and_writes_nothing(
+    tmp_path, trained_root, small_dataset, args, expected
+):
+    reports = tmp_path / "reports"
+    result = run_cli(
+        "prg-evaluate",
+        f"paths.root_dir={trained_root}",
+        f"paths.data_dir={small_dataset}",
+        f"report_dir={reports}",
+        *TINY,
+        *[a.format(root=trained_root) for a in args],
+    )
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode == 2, result.stderr[-2000:]
+    assert len(lines) == 1 and lines[0].startswith("prg-evaluate: error:"), lines
+    assert expected in lines[0]
+    assert not reports.exists()
