@@ -53,6 +53,7 @@ from prg.models.likelihoods import Likelihoods
 log = logging.getLogger(__name__)
 
 PARTS = ("classifiers", "likelihood", "coherence")
+FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse")
 TABLE1_COLUMNS = ("model", "family", "cell", "value", "sem", "paper", "k", "n_test", "seconds")
 COHERENCE_COLUMNS = ("model", "family", "target", "given", "kind", "temperature", "coherence", "n")
 
@@ -69,6 +70,12 @@ class Evaluation:
 
 
 # ---- inputs ----------------------------------------------------------------------------------
+def _is_number(value: Any, integer: bool, minimum: float, strict: bool = False) -> bool:
+    if isinstance(value, bool) or not isinstance(value, int if integer else int | float):
+        return False
+    return value > minimum if strict else value >= minimum
+
+
 def _check_config(cfg: DictConfig) -> list[str]:
     parts = list(cfg.parts)
     unknown = [p for p in parts if p not in PARTS]
@@ -76,21 +83,17 @@ def _check_config(cfg: DictConfig) -> list[str]:
         raise UsageError(f"parts {parts}: choose from {list(PARTS)}")
     lk = cfg.likelihood
     for key in ("k_marginal", "k_conditional", "batch_size", "chunk_rows"):
-        value = lk[key]
-        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-            raise UsageError(f"likelihood.{key} must be an integer >= 1, got {value!r}")
-    for key, node in (("n_test", cfg), ("likelihood.n_test", lk)):
-        value = node.n_test
-        if value is not None and (
-            isinstance(value, bool) or not isinstance(value, int) or value < 1
-        ):
+        if not _is_number(lk[key], integer=True, minimum=1):
+            raise UsageError(f"likelihood.{key} must be an integer >= 1, got {lk[key]!r}")
+    for key, value in (("n_test", cfg.n_test), ("likelihood.n_test", lk.n_test)):
+        if value is not None and not _is_number(value, integer=True, minimum=1):
             raise UsageError(f"{key} must be null (all) or an integer >= 1, got {value!r}")
-    std = lk.traj_std
-    if std is not None and (isinstance(std, bool) or not isinstance(std, int | float) or std <= 0):
-        raise UsageError(f"likelihood.traj_std must be null (the model's own) or > 0, got {std!r}")
-    temperatures = cfg.coherence.temperatures
-    for kind, value in temperatures.items():
-        if isinstance(value, bool) or not isinstance(value, int | float) or value < 0:
+    if lk.traj_std is not None and not _is_number(lk.traj_std, False, 0, strict=True):
+        raise UsageError(
+            f"likelihood.traj_std must be null (the model's own) or > 0, got {lk.traj_std!r}"
+        )
+    for kind, value in cfg.coherence.temperatures.items():
+        if not _is_number(value, integer=False, minimum=0):
             raise UsageError(f"coherence.temperatures.{kind} must be a number >= 0, got {value!r}")
     return parts
 
@@ -115,14 +118,14 @@ def _checkpoint_paths(cfg: DictConfig) -> dict[str, Path]:
         return {str(name): Path(path) for name, path in cfg.checkpoints.items()}
     families = list(cfg.families)
     if not families:
-        raise UsageError("nothing to evaluate: give families=[...] or checkpoints.<name>=PATH")
+        raise UsageError("nothing to evaluate: give families=[...] or +checkpoints.<name>=PATH")
     paths = {f: Path(cfg.models_dir) / f / "model.ckpt" for f in families}
     missing = [str(p) for p in paths.values() if not p.is_file()]
     if missing:
         raise UsageError(
             f"checkpoint {missing[0]} does not exist: train it first (`dvc repro train` or "
             "`prg-train model=<family> export_dir=...`), or choose families=[...] / "
-            "checkpoints.<name>=PATH"
+            "+checkpoints.<name>=PATH"
         )
     return paths
 
@@ -136,9 +139,6 @@ def load_models(cfg: DictConfig) -> dict[str, tuple[MultimodalVAE, dict[str, Any
             raise UsageError(f"checkpoint {path} holds a {model.family} model, not {name}")
         models[name] = (model, info, path)
     return models
-
-
-FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse")
 
 
 def _test_data(cfg: DictConfig, n: int | None) -> dict[str, torch.Tensor]:
@@ -270,9 +270,10 @@ def metrics_of(result: Evaluation) -> dict[str, Any]:
 
 
 def _figures(models, per_class, cfg: DictConfig, folder: Path) -> None:
-    from prg.figures import _pyplot, image_grid, trajectory_grid
+    from prg.data.figures import pyplot
+    from prg.figures import image_grid, trajectory_grid
 
-    plt = _pyplot()
+    plt = pyplot()
     data = _test_data(cfg, None)
     first = [
         int(np.flatnonzero(data["label"].numpy() == c)[0])

@@ -6,21 +6,13 @@ import numpy as np
 import torch
 
 from prg.data.alphabet import ALPHABET, NUM_CLASSES
+from prg.data.figures import pyplot
 from prg.models.base import MultimodalVAE
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def _grid(items, titles: list[str], cols: int, title: str, cell: tuple[float, float], draw):
     """One small axes per item, ``draw(ax, item)`` in each, titles above."""
-    plt = _pyplot()
+    plt = pyplot()
     rows = -(-len(items) // cols)
     fig, axes = plt.subplots(rows, cols, figsize=(cols * cell[0], rows * cell[1]), squeeze=False)
     for ax in axes.flat:

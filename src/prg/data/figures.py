@@ -10,7 +10,8 @@ import numpy as np
 from prg.data.alphabet import ALPHABET
 
 
-def _pyplot():
+def pyplot():
+    """matplotlib's pyplot on the non-interactive Agg backend (headless, no display needed)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -47,7 +48,7 @@ def write_dataset_figures(
     list of Path
         The PNG files written.
     """
-    plt = _pyplot()
+    plt = pyplot()
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     trajs = np.asarray(train["traj"]).reshape(len(train["label"]), n_points, 2)
