@@ -1,0 +1,1 @@
+"""The writing pipeline: from a generated word to a robot trajectory (DMPs, connection, timing)."""

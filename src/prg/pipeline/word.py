@@ -1,0 +1,476 @@
+"""The word trajectory: one pen motion for a whole word (or line of words), in centimetres.
+
+A :class:`WordTrajectory` is what the final processing map produces and what the DMP fitting, the
+simulator and the studies consume. Its points are split into consecutive **segments**, each of
+one kind:
+
+* ``"letter"`` — a letter's own points (in the order of the non-space characters of ``text``);
+* ``"connection"`` — the pen-down stroke joining two letters of one word
+  (:mod:`prg.pipeline.connect`); a pair of letters already within ``delta`` has no connection
+  segment, so two letter segments can be adjacent;
+* ``"space"`` — the pen-up travel between the last letter of a word and the first of the next,
+  when ``text`` holds several words on one line (a straight path subdivided at ``delta``: the DMP
+  stays one continuous motion; the simulator lifts the pen and renderings draw no ink there).
+
+Files: :meth:`WordTrajectory.to_json` / :meth:`WordTrajectory.from_json` (schema
+``prg.word_trajectory`` version 1; floats round-trip exactly), :meth:`WordTrajectory.to_svg` and
+:meth:`WordTrajectory.to_png`. Every file is written under a temporary name in the destination
+folder and renamed into place, so a reader never sees half a file.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from xml.sax.saxutils import escape
+
+import numpy as np
+
+from prg.errors import UsageError
+from prg.pipeline.connect import ConnectionResult
+from prg.pipeline.layout import word_breaks
+
+SCHEMA = "prg.word_trajectory"
+SCHEMA_VERSION = 1
+SEGMENT_KINDS = ("letter", "connection", "space")
+DEFAULT_SPEED_CM_S = 2.0
+
+# How each kind is drawn when highlighting: (colour, width as a fraction of the pen width, dashes)
+_STYLES = {
+    "letter": ("#000000", 1.0, None),
+    "connection": ("#d62728", 1.0, None),
+    "space": ("#9e9e9e", 0.5, (3.0, 3.0)),
+}
+_INK = ("#000000", 1.0, None)
+
+
+def _arc_length(points: np.ndarray) -> float:
+    if points.shape[0] < 2:
+        return 0.0
+    d = np.diff(points, axis=0)
+    return float(np.hypot(d[:, 0], d[:, 1]).sum())
+
+
+@dataclass
+class WordTrajectory:
+    """A written word: points, their segments, the text, timing and (optionally) its DMP.
+
+    Attributes
+    ----------
+    points : ndarray, shape (P, 2)
+        The pen path in centimetres, baseline at ``y = 0``, y up.
+    segment : ndarray of int, shape (P,)
+        Segment id of each point: ``0, ..., S - 1``, non-decreasing, every segment non-empty.
+    segment_kinds : list of str, length S
+        ``"letter"``, ``"connection"`` or ``"space"`` per segment (module docstring).
+    text : str
+        The written text; its non-space characters are the letter segments, in order.
+    dmp : dict or None
+        The fitted DMP (``to_dict()`` of the DMP helper: weights, start, goal, tau, basis count),
+        stored as given (JSON-compatible values).
+    speed_cm_s : float
+        Mean pen speed along the path (cm/s), from the writing config.
+    duration_s : float, optional
+        Time to write the whole path; computed as path length / speed when not given.
+    """
+
+    points: np.ndarray
+    segment: np.ndarray
+    segment_kinds: list[str]
+    text: str
+    dmp: dict | None = None
+    speed_cm_s: float = DEFAULT_SPEED_CM_S
+    duration_s: float | None = field(default=None)
+
+    def __post_init__(self) -> None:
+        self.points = np.asarray(self.points, dtype=np.float64)
+        self.segment = np.asarray(self.segment)
+        self.segment_kinds = list(self.segment_kinds)
+        if self.duration_s is None and self._speed_ok():
+            self.duration_s = self.path_length / float(self.speed_cm_s)
+        self.validate()
+
+    def _speed_ok(self) -> bool:
+        try:
+            return math.isfinite(float(self.speed_cm_s)) and float(self.speed_cm_s) > 0
+        except (TypeError, ValueError):
+            return False
+
+    # ------------------------------------------------------------------ checks and views
+    def validate(self) -> None:
+        """Check the invariants; raises :class:`UsageError` naming the first one broken."""
+        pts, seg = self.points, self.segment
+        if pts.ndim != 2 or pts.shape[1] != 2 or pts.shape[0] < 1:
+            raise UsageError(f"points must have shape (P, 2) with P >= 1, got {pts.shape}")
+        if not np.all(np.isfinite(pts)):
+            raise UsageError("points contain NaN or infinite values")
+        if seg.shape != (pts.shape[0],):
+            raise UsageError(f"segment must have shape ({pts.shape[0]},), got {seg.shape}")
+        if seg.dtype.kind not in "iu":
+            if seg.dtype.kind != "f" or not np.all(seg == np.round(seg)):
+                raise UsageError("segment ids must be integers")
+            self.segment = seg = seg.astype(np.int64)
+        else:
+            self.segment = seg = seg.astype(np.int64)
+        steps = np.diff(seg)
+        if seg[0] != 0 or np.any((steps != 0) & (steps != 1)):
+            raise UsageError("segment ids must run 0, 1, 2, ... in order, each segment non-empty")
+        n_seg = int(seg[-1]) + 1
+        if len(self.segment_kinds) != n_seg:
+            raise UsageError(
+                f"segment_kinds has {len(self.segment_kinds)} entries for {n_seg} segments"
+            )
+        bad = [k for k in self.segment_kinds if k not in SEGMENT_KINDS]
+        if bad:
+            raise UsageError(
+                f"unknown segment kind {bad[0]!r}: accepted are {', '.join(SEGMENT_KINDS)}"
+            )
+        if not isinstance(self.text, str):
+            raise UsageError(f"text must be a string, got {type(self.text).__name__}")
+        n_chars = sum(c != " " for c in self.text)
+        n_letters = self.segment_kinds.count("letter")
+        if n_chars != n_letters:
+            raise UsageError(
+                f"text {self.text!r} has {n_chars} characters but there are {n_letters} "
+                "letter segments"
+            )
+        if self.dmp is not None and not isinstance(self.dmp, dict):
+            raise UsageError(f"dmp must be a dict or None, got {type(self.dmp).__name__}")
+        if not self._speed_ok():
+            raise UsageError(f"speed_cm_s must be a positive number, got {self.speed_cm_s!r}")
+        self.speed_cm_s = float(self.speed_cm_s)
+        try:
+            duration = float(self.duration_s)
+        except (TypeError, ValueError):
+            raise UsageError(f"duration_s must be a number, got {self.duration_s!r}") from None
+        if not (math.isfinite(duration) and duration >= 0):
+            raise UsageError(f"duration_s must be a non-negative number, got {self.duration_s!r}")
+        self.duration_s = duration
+
+    @property
+    def path_length(self) -> float:
+        """Length of the whole path (cm), pen-up travel included."""
+        return _arc_length(self.points)
+
+    @property
+    def n_segments(self) -> int:
+        return len(self.segment_kinds)
+
+    def segment_points(self, k: int) -> np.ndarray:
+        """Points of segment ``k``, shape (n_k, 2)."""
+        return self.points[self.segment == k]
+
+    @property
+    def letters(self) -> list[tuple[str, np.ndarray]]:
+        """``(character, points)`` of every letter segment, in writing order."""
+        chars = [c for c in self.text if c != " "]
+        ids = [k for k, kind in enumerate(self.segment_kinds) if kind == "letter"]
+        return [(c, self.segment_points(k)) for c, k in zip(chars, ids)]
+
+    def pen_down(self) -> np.ndarray:
+        """Per point: False on pen-up (``"space"``) segments, shape (P,)."""
+        kinds = np.array(self.segment_kinds, dtype=object)
+        return kinds[self.segment] != "space"
+
+    # ------------------------------------------------------------------ JSON
+    def to_dict(self) -> dict:
+        """The JSON document (schema ``prg.word_trajectory``, version 1)."""
+        return {
+            "schema": SCHEMA,
+            "version": SCHEMA_VERSION,
+            "text": self.text,
+            "units": "cm",
+            "speed_cm_s": self.speed_cm_s,
+            "duration_s": self.duration_s,
+            "segment_kinds": list(self.segment_kinds),
+            "segment": [int(s) for s in self.segment],
+            "points": [[float(x), float(y)] for x, y in self.points],
+            "dmp": _jsonable(self.dmp),
+        }
+
+    @classmethod
+    def from_dict(cls, doc: dict) -> WordTrajectory:
+        """Inverse of :meth:`to_dict`; raises :class:`UsageError` on a malformed document."""
+        if not isinstance(doc, dict):
+            raise UsageError("expected a JSON object")
+        if doc.get("schema") != SCHEMA:
+            raise UsageError(f"schema must be {SCHEMA!r}, got {doc.get('schema')!r}")
+        if doc.get("version") != SCHEMA_VERSION:
+            raise UsageError(
+                f"unsupported version {doc.get('version')!r}: accepted is {SCHEMA_VERSION}"
+            )
+        required = ("text", "speed_cm_s", "duration_s", "segment_kinds", "segment", "points")
+        missing = [k for k in required if k not in doc]
+        if missing:
+            raise UsageError(f"missing field {missing[0]!r}")
+        if doc.get("units", "cm") != "cm":
+            raise UsageError(f"units must be 'cm', got {doc.get('units')!r}")
+        if not isinstance(doc["segment_kinds"], list):
+            raise UsageError("segment_kinds must be a list")
+        try:
+            points = np.array(doc["points"], dtype=np.float64)
+            segment = np.array(doc["segment"])
+        except (TypeError, ValueError):
+            raise UsageError("points and segment must be numeric arrays") from None
+        if points.size == 0:
+            points = points.reshape(0, 2)
+        return cls(
+            points=points,
+            segment=segment,
+            segment_kinds=doc["segment_kinds"],
+            text=doc["text"],
+            dmp=doc.get("dmp"),
+            speed_cm_s=doc["speed_cm_s"],
+            duration_s=doc["duration_s"],
+        )
+
+    def to_json(self, path: str | os.PathLike) -> Path:
+        """Write the JSON document atomically; returns the path."""
+        text = json.dumps(self.to_dict(), allow_nan=False, separators=(",", ":"))
+        return _atomic_write(Path(path), lambda tmp: tmp.write_text(text + "\n", encoding="utf-8"))
+
+    @classmethod
+    def from_json(cls, path: str | os.PathLike) -> WordTrajectory:
+        """Read a file written by :meth:`to_json`.
+
+        Raises
+        ------
+        UsageError
+            One line naming the file: missing, not JSON, or not a valid word trajectory.
+        """
+        path = Path(path)
+        try:
+            raw = path.read_text(encoding="utf-8")
+        except FileNotFoundError:
+            raise UsageError(f"{path}: no such word trajectory file") from None
+        except (OSError, UnicodeDecodeError) as err:
+            raise UsageError(f"{path}: cannot read word trajectory ({err})") from None
+        try:
+            doc = json.loads(raw)
+        except json.JSONDecodeError as err:
+            raise UsageError(
+                f"{path}: not valid JSON ({err.msg} at line {err.lineno}, column {err.colno})"
+            ) from None
+        try:
+            return cls.from_dict(doc)
+        except UsageError as err:
+            raise UsageError(f"{path}: not a valid word trajectory: {err}") from None
+
+    # ------------------------------------------------------------------ rendering
+    def _polylines(self, highlight: bool) -> list[tuple[str, np.ndarray]]:
+        """``(kind, points)`` per drawn piece; each consecutive point pair is in one piece.
+
+        A piece starts at the previous segment's last point (so the ink is continuous) unless
+        that segment is pen-up; a pen-up piece ends at the next segment's first point. Without
+        ``highlight``, pen-up pieces are dropped.
+        """
+        out = []
+        kinds = self.segment_kinds
+        for k, kind in enumerate(kinds):
+            pts = self.segment_points(k)
+            if k > 0 and kinds[k - 1] != "space":
+                pts = np.concatenate([self.segment_points(k - 1)[-1:], pts])
+            if kind == "space" and k + 1 < len(kinds):
+                pts = np.concatenate([pts, self.segment_points(k + 1)[:1]])
+            if kind == "space" and not highlight:
+                continue
+            out.append((kind, pts))
+        return out
+
+    def to_svg(
+        self,
+        path: str | os.PathLike,
+        highlight: bool = True,
+        pen_width_cm: float = 0.04,
+        margin_cm: float = 0.3,
+    ) -> Path:
+        """Draw the word as SVG, 1 user unit = 1 cm, written atomically; returns the path.
+
+        Parameters
+        ----------
+        highlight : bool
+            True: letters black, connections red, pen-up travel grey dashed (each polyline has
+            ``class`` = its kind). False: all pen-down ink black, pen-up travel not drawn (what
+            a reader of the handwriting sees).
+        pen_width_cm, margin_cm : float
+        """
+        lo = self.points.min(axis=0) - margin_cm
+        hi = self.points.max(axis=0) + margin_cm
+        w, h = hi - lo
+        lines = [
+            '<?xml version="1.0" encoding="UTF-8"?>',
+            f'<svg xmlns="http://www.w3.org/2000/svg" width="{w:.4f}cm" height="{h:.4f}cm" '
+            f'viewBox="0 0 {w:.6f} {h:.6f}">',
+            f"<title>{escape(self.text)}</title>",
+            '<rect width="100%" height="100%" fill="#ffffff"/>',
+        ]
+        for kind, pts in self._polylines(highlight):
+            colour, rel_width, dashes = _STYLES[kind] if highlight else _INK
+            coords = " ".join(f"{x - lo[0]:.5f},{hi[1] - y:.5f}" for x, y in pts)
+            dash = ""
+            if dashes:
+                dash = ' stroke-dasharray="{}"'.format(
+                    ",".join(f"{d * pen_width_cm * rel_width:.4f}" for d in dashes)
+                )
+            lines.append(
+                f'<polyline class="{kind}" points="{coords}" fill="none" stroke="{colour}" '
+                f'stroke-width="{pen_width_cm * rel_width:.4f}" stroke-linecap="round" '
+                f'stroke-linejoin="round"{dash}/>'
+            )
+        lines.append("</svg>")
+        svg = "\n".join(lines) + "\n"
+        return _atomic_write(Path(path), lambda tmp: tmp.write_text(svg, encoding="utf-8"))
+
+    def to_png(
+        self,
+        path: str | os.PathLike,
+        highlight: bool = True,
+        dpi: int = 150,
+        pen_width_cm: float = 0.04,
+        show_points: bool = False,
+    ) -> Path:
+        """Draw the word as PNG with matplotlib (Agg), true to scale, written atomically.
+
+        Parameters
+        ----------
+        highlight : bool
+            As in :meth:`to_svg`.
+        dpi : int
+        pen_width_cm : float
+        show_points : bool
+            Also mark every point (to inspect spacing).
+        """
+        from prg.data.figures import pyplot
+
+        plt = pyplot()
+        margin = 0.3
+        lo = self.points.min(axis=0) - margin
+        hi = self.points.max(axis=0) + margin
+        w_in, h_in = (hi - lo) / 2.54
+        fig = plt.figure(figsize=(max(w_in, 0.5), max(h_in, 0.5)), dpi=dpi)
+        try:
+            ax = fig.add_axes((0, 0, 1, 1))
+            lw = pen_width_cm / 2.54 * 72  # points
+            for kind, pts in self._polylines(highlight):
+                colour, rel_width, dashes = _STYLES[kind] if highlight else _INK
+                ax.plot(
+                    pts[:, 0],
+                    pts[:, 1],
+                    color=colour,
+                    linewidth=lw * rel_width,
+                    linestyle=(0, dashes) if dashes else "-",
+                    solid_capstyle="round",
+                    solid_joinstyle="round",
+                    label=kind,
+                )
+                if show_points:
+                    ax.plot(pts[:, 0], pts[:, 1], ".", color=colour, markersize=lw * 0.8)
+            ax.set_xlim(lo[0], hi[0])
+            ax.set_ylim(lo[1], hi[1])
+            ax.set_aspect("equal")
+            ax.axis("off")
+
+            def save(tmp: Path) -> None:
+                fig.savefig(tmp, dpi=dpi, format="png", metadata={"Software": None})
+
+            return _atomic_write(Path(path), save)
+        finally:
+            plt.close(fig)
+
+
+def _jsonable(value):
+    """Numpy arrays and scalars inside ``value`` as plain JSON values."""
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def _atomic_write(path: Path, write: Callable[[Path], object]) -> Path:
+    """Call ``write(tmp)`` on a temporary file next to ``path``, then rename it to ``path``."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    tmp = Path(name)
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return path
+
+
+def assemble_word(
+    letter_trajs_cm: Sequence[np.ndarray],
+    connections: Sequence[ConnectionResult | np.ndarray],
+    text: str,
+    speed_cm_s: float = DEFAULT_SPEED_CM_S,
+    dmp: dict | None = None,
+) -> WordTrajectory:
+    """Concatenate laid-out letters and their connections into a :class:`WordTrajectory`.
+
+    Parameters
+    ----------
+    letter_trajs_cm : sequence of ndarray, each shape (n_i, 2)
+        The letters in centimetres (:func:`prg.pipeline.layout.layout_letters`), one per
+        non-space character of ``text``.
+    connections : sequence of ConnectionResult or ndarray of shape (k, 2)
+        One per consecutive letter pair: the points strictly between the two letters
+        (:func:`prg.pipeline.connect.connect_sequence`). Where ``text`` has a space between the
+        two letters, the entry is the pen-up travel and becomes a ``"space"`` segment; otherwise
+        a ``"connection"`` segment. Empty entries add no segment.
+    text : str
+    speed_cm_s : float
+        Writing speed; ``duration_s`` = path length / speed.
+    dmp : dict, optional
+
+    Returns
+    -------
+    WordTrajectory
+    """
+    letters = [np.asarray(p, dtype=np.float64) for p in letter_trajs_cm]
+    n_chars = sum(c != " " for c in text)
+    if len(letters) != n_chars or not letters:
+        raise UsageError(
+            f"text {text!r} has {n_chars} characters but {len(letters)} letter trajectories "
+            "were given (at least one is needed)"
+        )
+    if len(connections) != len(letters) - 1:
+        raise UsageError(
+            f"{len(letters)} letters need {len(letters) - 1} connections, got {len(connections)}"
+        )
+    breaks = word_breaks(text)
+    pieces: list[np.ndarray] = []
+    kinds: list[str] = []
+    for i, letter in enumerate(letters):
+        if letter.ndim != 2 or letter.shape[1] != 2 or letter.shape[0] < 1:
+            raise UsageError(f"letter {i} must have shape (n, 2), got {letter.shape}")
+        pieces.append(letter)
+        kinds.append("letter")
+        if i < len(connections):
+            conn = connections[i]
+            pts = conn.points if isinstance(conn, ConnectionResult) else conn
+            pts = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
+            if pts.shape[0]:
+                pieces.append(pts)
+                kinds.append("space" if breaks[i] else "connection")
+    segment = np.concatenate([np.full(p.shape[0], k, dtype=np.int64) for k, p in enumerate(pieces)])
+    return WordTrajectory(
+        points=np.concatenate(pieces, axis=0),
+        segment=segment,
+        segment_kinds=kinds,
+        text=text,
+        dmp=dmp,
+        speed_cm_s=speed_cm_s,
+    )

@@ -1,0 +1,259 @@
+"""Connection strokes between letters: Algorithm 1's guarantees and the straight joiner."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from prg.data.preprocess import normalise, resample_arclength
+from prg.errors import UsageError
+from prg.pipeline.connect import (
+    ConnectionParams,
+    connect_letters,
+    connect_sequence,
+    connection_path,
+    straight_connection,
+    subdivide,
+)
+from tests.conftest import letter_like
+
+P = ConnectionParams()
+EPS = 1e-9
+
+
+def random_pair(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Two random smooth 'letters' 0.75-1.5 cm tall, the second to the right of the first."""
+
+    def letter() -> np.ndarray:
+        pts = normalise(resample_arclength(letter_like(rng, 80), 100))
+        return pts * rng.uniform(0.35, 0.75)
+
+    prev, nxt = letter(), letter()
+    shift = np.array([prev[:, 0].max() - nxt[:, 0].min() + rng.uniform(0.05, 0.6), 0.0])
+    nxt = nxt + shift + [0.0, rng.normal(0, 0.3)]
+    return prev, nxt
+
+
+PAIRS = [random_pair(np.random.default_rng(seed)) for seed in range(40)]
+
+
+def cross2(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def step_lengths(path: np.ndarray) -> np.ndarray:
+    d = np.diff(path, axis=0)
+    return np.hypot(d[:, 0], d[:, 1])
+
+
+def heading_changes(prev: np.ndarray, nxt: np.ndarray, steered: np.ndarray) -> np.ndarray:
+    """|turn| between consecutive segments of [prev's last moving segment, steered steps...]."""
+    d = np.diff(prev, axis=0)
+    moving = d[np.hypot(d[:, 0], d[:, 1]) > 1e-12]
+    first = moving[-1] if len(moving) else nxt[0] - prev[-1]
+    steps = np.diff(np.concatenate([prev[-1:], steered]), axis=0)
+    vecs = np.concatenate([first[None], steps])
+    angles = np.arctan2(vecs[:, 1], vecs[:, 0])
+    return np.abs(np.remainder(np.diff(angles) + np.pi, 2 * np.pi) - np.pi)
+
+
+def check_guarantees(prev, nxt, result, delta, alpha_max, max_steps) -> None:
+    path = connection_path(prev, result, nxt)
+    assert np.all(np.isfinite(path))
+    assert step_lengths(path).max(initial=0.0) <= delta * (1 + EPS)
+    assert 0 <= result.steered <= min(max_steps, len(result.points))
+    steered = result.points[: result.steered]
+    if result.steered:
+        np.testing.assert_allclose(step_lengths(np.concatenate([prev[-1:], steered])), delta)
+        assert heading_changes(prev, nxt, steered).max() <= alpha_max + 1e-9
+    if not result.fallback:
+        end = result.points[-1] if len(result.points) else prev[-1]
+        assert np.hypot(*(nxt[0] - end)) <= delta * (1 + EPS)
+
+
+@pytest.mark.parametrize("join", ["first", "retrace"])
+def test_connections_of_random_letter_pairs_keep_every_guarantee(join):
+    for prev, nxt in PAIRS:
+        result = connect_letters(prev, nxt, join=join)
+        check_guarantees(prev, nxt, result, P.delta, P.alpha_max, P.max_steps)
+
+
+def test_default_connections_of_random_letter_pairs_need_no_fallback():
+    results = [connect_letters(prev, nxt) for prev, nxt in PAIRS]
+    assert not any(r.fallback for r in results)
+    assert all(r.target == 0 for r in results)
+
+
+def test_connection_turns_smoothly_where_the_straight_joiner_kinks():
+    # prev ends heading down; next letter starts up and to the right: a U-turn is needed
+    prev = np.column_stack([np.zeros(20), np.linspace(1.0, 0.0, 20)])
+    nxt = np.column_stack([np.linspace(0.8, 1.2, 20), np.full(20, 0.8)])
+    result = connect_letters(prev, nxt)
+    assert not result.fallback
+    assert heading_changes(prev, nxt, result.points[: result.steered]).max() <= P.alpha_max + EPS
+    straight = straight_connection(prev, nxt)
+    kink = heading_changes(prev, nxt, np.concatenate([straight.points, nxt[:1]]))[0]
+    assert kink > math.radians(120)
+
+
+def test_target_inside_the_turning_circle_is_reached_not_orbited():
+    # the next letter starts just left of the pen, inside its tightest left turn
+    prev = np.column_stack([np.linspace(-1.0, 0.0, 20), np.zeros(20)])
+    nxt = np.array([[0.0, 0.12], [-0.2, 0.3], [-0.4, 0.5]])
+    result = connect_letters(prev, nxt)
+    assert not result.fallback
+    check_guarantees(prev, nxt, result, P.delta, P.alpha_max, P.max_steps)
+
+
+def test_retrace_joins_inside_the_letter_and_runs_back_to_its_first_point():
+    # a vertical stroke written top-down; the pen arrives from the left at its middle
+    prev = np.column_stack([np.linspace(-1.0, 0.0, 20), np.zeros(20)])
+    nxt = np.column_stack([np.full(41, 0.5), np.linspace(1.0, -1.0, 41)])
+    result = connect_letters(prev, nxt, join="retrace", home_radius=0.0, theta_f=0.0, theta_p=4.0)
+    assert 0 < result.target < 40
+    back = result.points[result.steered :]
+    # the return passes through nxt[target], ..., nxt[1] in that order
+    hits = [
+        int(np.flatnonzero(np.all(np.isclose(back, nxt[k]), axis=1))[0])
+        for k in range(result.target, 0, -1)
+    ]
+    assert hits == sorted(hits)
+    check_guarantees(prev, nxt, result, P.delta, P.alpha_max, P.max_steps)
+
+
+def test_first_join_never_joins_inside_the_letter():
+    prev = np.column_stack([np.linspace(-1.0, 0.0, 20), np.zeros(20)])
+    nxt = np.column_stack([np.full(41, 0.5), np.linspace(1.0, -1.0, 41)])
+    result = connect_letters(prev, nxt, home_radius=0.0, theta_f=0.0, theta_p=4.0)
+    assert result.target == 0 and not result.fallback
+    assert np.hypot(*(result.points[-1] - nxt[0])) <= P.delta
+
+
+def test_running_out_of_steps_finishes_with_a_straight_segment():
+    prev, nxt = PAIRS[0]
+    nxt = nxt + np.array([3.0, 0.0])  # far away: 3 steps cannot get there
+    result = connect_letters(prev, nxt, max_steps=3)
+    assert result.fallback and result.steered <= 3
+    check_guarantees(prev, nxt, result, P.delta, P.alpha_max, 3)
+    tail = np.concatenate([result.points[result.steered - 1 :], nxt[:1]])
+    cross = cross2(tail[1:] - tail[0], nxt[0] - tail[0])  # collinear with the end
+    np.testing.assert_allclose(cross, 0.0, atol=1e-9)
+
+
+def test_zero_steps_is_the_straight_joiner():
+    prev, nxt = PAIRS[1]
+    result = connect_letters(prev, nxt, max_steps=0)
+    assert result.fallback and result.steered == 0
+    np.testing.assert_allclose(result.points, straight_connection(prev, nxt).points)
+
+
+def test_letters_already_within_delta_need_no_connection():
+    prev = np.array([[0.0, 0.0], [1.0, 0.0]])
+    nxt = np.array([[1.03, 0.0], [2.0, 0.0]])
+    result = connect_letters(prev, nxt)
+    assert result.points.shape == (0, 2) and result.steered == 0 and not result.fallback
+
+
+def test_defaults_are_those_of_connection_params():
+    prev, nxt = PAIRS[2]
+    a = connect_letters(prev, nxt)
+    b = connect_letters(prev, nxt, **ConnectionParams().as_kwargs())
+    np.testing.assert_array_equal(a.points, b.points)
+
+
+def test_connect_letters_is_deterministic():
+    prev, nxt = PAIRS[3]
+    np.testing.assert_array_equal(
+        connect_letters(prev, nxt).points, connect_letters(prev, nxt).points
+    )
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"prev": np.zeros((3, 3))}, "prev must have shape"),
+        ({"nxt": np.zeros((0, 2))}, "nxt must have shape"),
+        ({"prev": np.array([[0.0, np.nan]])}, "prev contains NaN"),
+        ({"delta": 0.0}, "delta must be a positive"),
+        ({"alpha_max": 4.0}, "alpha_max must be in"),
+        ({"theta_a": -1.0}, "theta_a must be a non-negative"),
+        ({"home_radius": math.inf}, "home_radius must be"),
+        ({"max_steps": 2.5}, "max_steps must be a non-negative integer"),
+        ({"join": "middle"}, "join must be one of"),
+    ],
+)
+def test_bad_arguments_are_named(kwargs, match):
+    args = {"prev": np.array([[0.0, 0.0], [1.0, 0.0]]), "nxt": np.array([[2.0, 0.0]]), **kwargs}
+    with pytest.raises(UsageError, match=match):
+        connect_letters(**args)
+
+
+def test_straight_joiner_spaces_points_evenly_at_most_delta_apart():
+    prev = np.array([[0.0, 0.0], [1.0, 1.0]])
+    nxt = np.array([[4.0, 5.0], [5.0, 5.0]])  # 5 cm away
+    result = straight_connection(prev, nxt, delta=0.3)
+    path = connection_path(prev, result, nxt)
+    gaps = step_lengths(path)
+    assert len(result.points) == math.ceil(5.0 / 0.3) - 1
+    np.testing.assert_allclose(gaps, 5.0 / math.ceil(5.0 / 0.3))
+    np.testing.assert_allclose(cross2(path - path[0], nxt[0] - path[0]), 0.0, atol=1e-12)
+
+
+@pytest.mark.parametrize(("dist", "delta"), [(0.3, 0.1), (1.0, 0.1), (0.7, 0.07), (0.05, 0.05)])
+def test_subdivide_respects_delta_at_exact_multiples(dist, delta):
+    pts = subdivide(np.zeros(2), np.array([dist, 0.0]), delta)
+    path = np.concatenate([[[0.0, 0.0]], pts, [[dist, 0.0]]])
+    assert step_lengths(path).max() <= delta * (1 + 1e-12)  # up to rounding of the coordinates
+    assert len(pts) <= round(dist / delta)
+
+
+def test_connect_sequence_uses_the_straight_pen_up_travel_across_word_breaks():
+    letters = [PAIRS[4][0], PAIRS[4][1], PAIRS[4][1] + [2.5, 0.0]]
+    results = connect_sequence(letters, breaks=[False, True])
+    assert results[0].steered > 0
+    np.testing.assert_allclose(
+        results[1].points, straight_connection(letters[1], letters[2]).points
+    )
+    straight = connect_sequence(letters, method="straight")
+    assert all(r.steered == 0 for r in straight)
+    with pytest.raises(UsageError, match="breaks must have one entry per letter pair"):
+        connect_sequence(letters, breaks=[True])
+
+
+coords = st.floats(-4.0, 4.0, allow_nan=False, allow_infinity=False)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    prev=arrays(np.float64, st.tuples(st.integers(1, 6), st.just(2)), elements=coords),
+    nxt=arrays(np.float64, st.tuples(st.integers(1, 30), st.just(2)), elements=coords),
+    delta=st.floats(0.02, 0.5),
+    alpha_max=st.floats(0.02, math.pi),
+    thetas=st.tuples(*[st.floats(0.0, 5.0)] * 4),
+    home_radius=st.floats(0.0, 2.0),
+    max_steps=st.integers(0, 300),
+    join=st.sampled_from(["first", "retrace"]),
+)
+def test_arbitrary_inputs_give_finite_gap_free_connections(
+    prev, nxt, delta, alpha_max, thetas, home_radius, max_steps, join
+):
+    theta_o, theta_a, theta_f, theta_p = thetas
+    result = connect_letters(
+        prev,
+        nxt,
+        delta,
+        alpha_max,
+        theta_o,
+        theta_a,
+        theta_f,
+        theta_p,
+        home_radius=home_radius,
+        max_steps=max_steps,
+        join=join,
+    )
+    check_guarantees(prev, nxt, result, delta, alpha_max, max_steps)

@@ -1,0 +1,139 @@
+"""Sizing and placement of letters on the baseline (final processing map, steps 1-3)."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from prg.data.preprocess import normalise, resample_arclength
+from prg.errors import UsageError
+from prg.pipeline.layout import (
+    LayoutParams,
+    layout_letters,
+    letter_band,
+    place_letter,
+    word_breaks,
+)
+from tests.conftest import letter_like
+
+P = LayoutParams()
+H = P.letter_height
+
+
+def letter(seed: int, aspect: float | None = 0.8) -> np.ndarray:
+    """A normalised random letter (100 points, y up); ``aspect`` = width / height when given."""
+    pts = normalise(resample_arclength(letter_like(np.random.default_rng(seed), 80), 100))
+    if aspect is not None:
+        ext = np.ptp(pts, axis=0)
+        pts = normalise(pts * [aspect / ext[0], 1.0 / ext[1]])
+    return pts
+
+
+def box(points: np.ndarray) -> tuple[float, float, float, float]:
+    (x0, y0), (x1, y1) = points.min(axis=0), points.max(axis=0)
+    return float(x0), float(y0), float(x1), float(y1)
+
+
+def test_x_height_letters_are_half_the_height_of_uppercase():
+    placed = layout_letters([letter(0), letter(1), letter(2)], "Aax")
+    heights = [box(p)[3] - box(p)[1] for p in placed]
+    assert heights[0] == pytest.approx(H)
+    assert heights[1] == pytest.approx(P.x_height * H)
+    assert heights[2] == pytest.approx(heights[0] / 2)
+
+
+@pytest.mark.parametrize("char", list("ABZ0789bdhklt"))
+def test_uppercase_digits_and_ascenders_stand_full_height_on_the_baseline(char):
+    _, y0, _, y1 = box(place_letter(letter(3), char, 0.0))
+    assert y0 == pytest.approx(0.0, abs=1e-12)
+    assert y1 == pytest.approx(H)
+
+
+@pytest.mark.parametrize("char", list("gjpqy"))
+def test_descenders_reach_below_the_baseline(char):
+    _, y0, _, y1 = box(place_letter(letter(4), char, 0.0))
+    assert y0 == pytest.approx(-P.descender * H)
+    assert y1 == pytest.approx(P.x_height * H)
+
+
+def test_f_is_both_ascender_and_descender():
+    assert letter_band("f") == pytest.approx((-P.descender * H, H))
+    _, y0, _, y1 = box(place_letter(letter(5), "f", 0.0))
+    assert (y0, y1) == pytest.approx((-P.descender * H, H))
+    print_f = LayoutParams(descenders="gjpqy")
+    assert letter_band("f", print_f) == pytest.approx((0.0, H))
+
+
+@pytest.mark.parametrize("char", list("aceimnorsuvwxz"))
+def test_x_height_letters_sit_on_the_baseline(char):
+    assert letter_band(char) == pytest.approx((0.0, P.x_height * H))
+
+
+def test_letters_are_placed_left_to_right_a_fixed_gap_apart_without_overlap():
+    text = "Hello42world"
+    placed = layout_letters([letter(s) for s in range(len(text))], text)
+    boxes = [box(p) for p in placed]
+    assert boxes[0][0] == pytest.approx(0.0)
+    for (_, _, right, _), (left, _, _, _) in itertools.pairwise(boxes):
+        assert left - right == pytest.approx(P.gap)
+        assert left > right
+
+
+def test_each_space_adds_the_space_width():
+    text = " ab  c "
+    placed = layout_letters([letter(1), letter(2), letter(3)], text)
+    (_, _, b_right, _), (c_left, _, _, _) = box(placed[1]), box(placed[2])
+    assert c_left - b_right == pytest.approx(P.gap + 2 * P.space_width)
+    assert box(placed[0])[0] == pytest.approx(0.0)  # a leading space is ignored
+
+
+def test_scaling_keeps_the_aspect_ratio():
+    pts = letter(6, aspect=None)
+    placed = place_letter(pts, "k", 1.0)
+    scale = np.ptp(placed, axis=0) / np.ptp(pts, axis=0)
+    assert scale[0] == pytest.approx(scale[1])
+    np.testing.assert_allclose((placed - placed[0]) / scale[0], pts - pts[0], atol=1e-12)
+
+
+def test_a_very_wide_letter_is_limited_to_the_maximum_width():
+    flat = letter(7, aspect=6.0)
+    x0, y0, x1, y1 = box(place_letter(flat, "m", 0.0))
+    assert x1 - x0 == pytest.approx(P.max_width * H)
+    assert y1 - y0 < P.x_height * H
+    assert y0 == pytest.approx(0.0, abs=1e-12)
+
+
+def test_a_horizontal_stroke_is_sized_by_the_width_guard():
+    line = np.column_stack([np.linspace(-1, 1, 10), np.zeros(10)])
+    x0, y0, x1, y1 = box(place_letter(line, "a", 0.0))
+    assert (x1 - x0, y1 - y0) == pytest.approx((P.max_width * H, 0.0))
+
+
+def test_a_letter_with_no_extent_is_refused():
+    with pytest.raises(UsageError, match="letter 'a' has zero extent"):
+        place_letter(np.zeros((5, 2)), "a", 0.0)
+
+
+def test_letter_count_must_match_the_text():
+    with pytest.raises(UsageError, match="has 3 characters but 2 letter trajectories"):
+        layout_letters([letter(0), letter(1)], "a bc")
+
+
+def test_unsupported_characters_are_named():
+    with pytest.raises(UsageError, match=r"unsupported characters '!'"):
+        layout_letters([letter(0), letter(1)], "a!")
+
+
+def test_bad_layout_values_are_named():
+    with pytest.raises(UsageError, match="letter_height must be a positive"):
+        LayoutParams(letter_height=0.0)
+    with pytest.raises(UsageError, match="gap must be a non-negative"):
+        LayoutParams(gap=-0.1)
+
+
+def test_word_breaks_mark_pairs_separated_by_spaces():
+    assert word_breaks("ab cd") == [False, True, False]
+    assert word_breaks("  a  b ") == [True]
+    assert word_breaks("x") == []

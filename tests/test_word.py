@@ -1,0 +1,217 @@
+"""The word trajectory: assembly, JSON round trip, SVG and PNG renderings."""
+
+from __future__ import annotations
+
+import json
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from prg.data.preprocess import normalise, resample_arclength
+from prg.errors import UsageError
+from prg.pipeline.connect import ConnectionParams, connect_sequence
+from prg.pipeline.layout import layout_letters, word_breaks
+from prg.pipeline.word import WordTrajectory, _atomic_write, assemble_word
+from tests.conftest import letter_like
+
+TEXT = "ab cd"
+DELTA = ConnectionParams().delta
+
+
+def letters_cm(text: str = TEXT, seed: int = 0) -> list[np.ndarray]:
+    rng = np.random.default_rng(seed)
+    n = sum(c != " " for c in text)
+    raw = [normalise(resample_arclength(letter_like(rng, 80), 100)) for _ in range(n)]
+    return layout_letters(raw, text)
+
+
+@pytest.fixture(scope="module")
+def word() -> WordTrajectory:
+    placed = letters_cm()
+    connections = connect_sequence(placed, breaks=word_breaks(TEXT))
+    dmp = {"n_basis": 30, "tau": 1.5, "start": [0.0, 0.1], "weights": [[0.5, -1e-3]] * 3}
+    return assemble_word(placed, connections, TEXT, speed_cm_s=2.5, dmp=dmp)
+
+
+def test_every_letter_is_written_whole_and_in_order(word):
+    placed = letters_cm()
+    assert [c for c, _ in word.letters] == list("abcd")
+    for (_, pts), expected in zip(word.letters, placed):
+        np.testing.assert_array_equal(pts, expected)
+
+
+def test_segments_alternate_letters_connections_and_the_pen_up_space(word):
+    assert word.segment_kinds == [
+        "letter",
+        "connection",
+        "letter",
+        "space",
+        "letter",
+        "connection",
+        "letter",
+    ]
+    assert np.all(np.diff(word.segment) >= 0)
+    space = word.segment_kinds.index("space")
+    assert not word.pen_down()[word.segment == space].any()
+    assert word.pen_down()[word.segment != space].all()
+
+
+def test_joins_between_letters_leave_no_gap_larger_than_delta(word):
+    gaps = np.hypot(*np.diff(word.points, axis=0).T)
+    kinds = np.array(word.segment_kinds)[word.segment]
+    # every step into, inside or out of a connection or space segment
+    touches = (kinds[:-1] != "letter") | (kinds[1:] != "letter")
+    assert touches.sum() > 0
+    assert gaps[touches].max() <= DELTA * (1 + 1e-9)
+
+
+def test_duration_is_the_path_length_at_the_writing_speed(word):
+    assert word.duration_s == pytest.approx(word.path_length / 2.5)
+
+
+def test_json_round_trip_is_exact(word, tmp_path):
+    path = word.to_json(tmp_path / "word.json")
+    back = WordTrajectory.from_json(path)
+    np.testing.assert_array_equal(back.points, word.points)
+    np.testing.assert_array_equal(back.segment, word.segment)
+    assert back.segment_kinds == word.segment_kinds
+    assert back.text == word.text
+    assert back.dmp == word.dmp
+    assert (back.speed_cm_s, back.duration_s) == (word.speed_cm_s, word.duration_s)
+    assert json.loads(path.read_text())["version"] == 1
+
+
+def test_numpy_values_in_the_dmp_are_stored_as_json(tmp_path):
+    placed = letters_cm("ab")
+    w = assemble_word(
+        placed, connect_sequence(placed), "ab", dmp={"w": np.eye(2), "n": np.int64(3)}
+    )
+    back = WordTrajectory.from_json(w.to_json(tmp_path / "w.json"))
+    assert back.dmp == {"w": [[1.0, 0.0], [0.0, 1.0]], "n": 3}
+
+
+def test_writing_leaves_no_temporary_files(word, tmp_path):
+    word.to_json(tmp_path / "w.json")
+    word.to_svg(tmp_path / "w.svg")
+    word.to_png(tmp_path / "w.png", dpi=40)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["w.json", "w.png", "w.svg"]
+
+
+def test_a_failed_write_keeps_the_old_file(tmp_path):
+    target = tmp_path / "w.json"
+    target.write_text("old")
+
+    def half_then_fail(tmp):
+        tmp.write_text("half")
+        raise RuntimeError("disk full")
+
+    with pytest.raises(RuntimeError):
+        _atomic_write(target, half_then_fail)
+    assert target.read_text() == "old"
+    assert [p.name for p in tmp_path.iterdir()] == ["w.json"]
+
+
+@pytest.mark.parametrize(
+    ("content", "match"),
+    [
+        ('{"schema": "prg.word_trajectory", "vers', "not valid JSON"),
+        ("[1, 2]", "expected a JSON object"),
+        ('{"schema": "other", "version": 1}', "schema must be"),
+        ('{"schema": "prg.word_trajectory", "version": 7}', "unsupported version 7"),
+        ('{"schema": "prg.word_trajectory", "version": 1, "text": "a"}', "missing field"),
+    ],
+)
+def test_corrupt_json_is_a_one_line_usage_error_naming_the_file(tmp_path, content, match):
+    path = tmp_path / "bad.json"
+    path.write_text(content)
+    with pytest.raises(UsageError, match=match) as err:
+        WordTrajectory.from_json(path)
+    assert str(path) in str(err.value) and "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "match"),
+    [
+        ("points", [[0.0, 1.0]], "segment must have shape"),
+        ("segment_kinds", ["letter"], "segment_kinds has 1 entries"),
+        (
+            "segment_kinds",
+            ["letter", "ink", "letter", "space", "letter", "connection", "letter"],
+            "unknown segment kind 'ink'",
+        ),
+        ("text", "abc", "has 3 characters but there are 4 letter segments"),
+        ("speed_cm_s", -1.0, "speed_cm_s must be a positive"),
+        ("dmp", [1, 2], "dmp must be a dict"),
+    ],
+)
+def test_inconsistent_documents_are_refused(word, tmp_path, field, value, match):
+    doc = word.to_dict()
+    doc[field] = value
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(UsageError, match=match):
+        WordTrajectory.from_json(path)
+
+
+def test_a_missing_file_is_named(tmp_path):
+    with pytest.raises(UsageError, match="no such word trajectory file"):
+        WordTrajectory.from_json(tmp_path / "absent.json")
+
+
+def test_segment_ids_must_run_in_order(word):
+    with pytest.raises(UsageError, match="segment ids must run"):
+        WordTrajectory(word.points, word.segment[::-1], word.segment_kinds, word.text)
+
+
+def test_assembly_checks_its_counts():
+    placed = letters_cm("ab")
+    with pytest.raises(UsageError, match="2 letters need 1 connections, got 0"):
+        assemble_word(placed, [], "ab")
+    with pytest.raises(UsageError, match="has 3 characters but 2 letter trajectories"):
+        assemble_word(placed, [np.zeros((0, 2))], "abc")
+
+
+def test_touching_letters_get_no_connection_segment():
+    placed = letters_cm("ab")
+    w = assemble_word(placed, [np.zeros((0, 2))], "ab")
+    assert w.segment_kinds == ["letter", "letter"]
+
+
+def svg_polylines(path) -> list[ET.Element]:
+    root = ET.parse(path).getroot()
+    return root.findall("{http://www.w3.org/2000/svg}polyline")
+
+
+def test_svg_draws_letters_and_connections_in_distinct_styles(word, tmp_path):
+    lines = svg_polylines(word.to_svg(tmp_path / "w.svg"))
+    styles = {}
+    for line in lines:
+        styles.setdefault(line.get("class"), set()).add(
+            (line.get("stroke"), line.get("stroke-dasharray"))
+        )
+    assert sorted(styles) == ["connection", "letter", "space"]
+    assert all(len(s) == 1 for s in styles.values())
+    assert len({next(iter(s)) for s in styles.values()}) == 3
+    assert sum(line.get("class") == "letter" for line in lines) == 4
+
+
+def test_plain_svg_is_all_black_ink_without_pen_up_travel(word, tmp_path):
+    lines = svg_polylines(word.to_svg(tmp_path / "w.svg", highlight=False))
+    assert {line.get("stroke") for line in lines} == {"#000000"}
+    assert "space" not in {line.get("class") for line in lines}
+
+
+def test_png_opens_and_shows_connections_only_when_highlighted(word, tmp_path):
+    def reddish_pixels(path) -> int:
+        with Image.open(path) as img:
+            rgb = np.asarray(img.convert("RGB")).astype(int)
+        return int(((rgb[..., 0] > 150) & (rgb[..., 1] < 100) & (rgb[..., 2] < 100)).sum())
+
+    highlighted = word.to_png(tmp_path / "h.png", dpi=60)
+    plain = word.to_png(tmp_path / "p.png", dpi=60, highlight=False)
+    with Image.open(highlighted) as img:
+        assert img.format == "PNG" and img.width > img.height > 10
+    assert reddish_pixels(highlighted) > 0
+    assert reddish_pixels(plain) == 0
