@@ -1,0 +1,355 @@
+"""Discrete DMP (prg.pipeline.dmp): reproduction, generalisation, exactness of the rollout, fit."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+from numpy.testing import assert_allclose, assert_array_equal
+
+from prg.errors import UsageError
+from prg.pipeline import dmp as dmp_module
+from prg.pipeline.dmp import (
+    DMP,
+    basis_count,
+    basis_functions,
+    design_matrix,
+    fit_dmp,
+    forcing_targets,
+    rollout,
+)
+
+
+def word_like(n: int = 1000, loops: int = 12, width: float = 20.0, height: float = 4.0):
+    """A cursive-like curve in cm: ``loops`` loops of varying height, ``width`` x ``height``.
+
+    Sampled uniformly in time with a minimum-jerk time course, so the pen starts and ends at rest.
+    """
+    t = np.linspace(0.0, 1.0, n)
+    s = 10 * t**3 - 15 * t**4 + 6 * t**5
+    angle = 2 * np.pi * loops * s
+    amplitude = 0.55 + 0.45 * np.sin(2 * np.pi * 2.3 * s + 0.7) ** 2  # ascenders and x-height
+    x = s - 0.045 * np.sin(angle)
+    y = amplitude * (1 - np.cos(angle)) + 0.15 * np.sin(np.pi * s)
+    x = (x - x.min()) / np.ptp(x) * width
+    y = (y - y.min()) / np.ptp(y) * height
+    return np.column_stack([x, y])
+
+
+def rmse(a: np.ndarray, b: np.ndarray) -> float:
+    """Root mean squared Euclidean distance between corresponding points."""
+    return float(np.sqrt(np.mean(np.sum((a - b) ** 2, axis=1))))
+
+
+def rk4_reference(dmp: DMP, n_samples: int, y0=None, goal=None, tau=None, substeps: int = 10):
+    """Per-step RK4 integration of the DMP's ODE, written from the formulation, not the code.
+
+    ``y' = v / tau``, ``v' = (K (g - y) - D v - K (g - y0) x + K f(x)) / tau`` with ``x = exp(
+    -alpha_x t / tau)`` and ``f = design_matrix(x) @ weights``, from ``(y0, 0)``, ``substeps``
+    RK4 steps between output samples.
+    """
+    y0 = dmp.y0 if y0 is None else np.asarray(y0, float)
+    goal = dmp.goal if goal is None else np.asarray(goal, float)
+    tau = dmp.tau if tau is None else tau
+    k_, d_ = dmp.stiffness, dmp.damping
+    steps = (n_samples - 1) * substeps
+    h = tau / steps
+    half_times = np.arange(2 * steps + 1) * (h / 2)  # every RK4 stage time
+    x_half = np.exp(-dmp.alpha_x * half_times / tau)
+    f_half = design_matrix(x_half, dmp.centres, dmp.widths) @ dmp.weights
+
+    def acceleration(j: int, y: np.ndarray, v: np.ndarray) -> np.ndarray:
+        return (k_ * (goal - y) - d_ * v - k_ * (goal - y0) * x_half[j] + k_ * f_half[j]) / tau
+
+    y, v = y0.copy(), np.zeros_like(y0)
+    out = [y.copy()]
+    for i in range(steps):
+        j = 2 * i
+        k1y, k1v = v / tau, acceleration(j, y, v)
+        k2y, k2v = (v + h / 2 * k1v) / tau, acceleration(j + 1, y + h / 2 * k1y, v + h / 2 * k1v)
+        k3y, k3v = (v + h / 2 * k2v) / tau, acceleration(j + 1, y + h / 2 * k2y, v + h / 2 * k2v)
+        k4y, k4v = (v + h * k3v) / tau, acceleration(j + 2, y + h * k3y, v + h * k3v)
+        y = y + h / 6 * (k1y + 2 * k2y + 2 * k3y + k4y)
+        v = v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+        if (i + 1) % substeps == 0:
+            out.append(y.copy())
+    return np.array(out)
+
+
+@pytest.fixture(scope="module")
+def word():
+    points = word_like()
+    assert points.shape == (1000, 2)
+    assert_allclose(np.ptp(points, axis=0), [20.0, 4.0])
+    return points
+
+
+@pytest.fixture(scope="module")
+def word_dmp(word):
+    return fit_dmp(word, tau=3.0)
+
+
+# ----------------------------------------------------------------------------- reproduction
+
+
+def test_reproduces_a_20_cm_1000_point_word_within_a_tenth_of_a_millimetre(word, word_dmp):
+    out = rollout(word_dmp)
+    assert out.shape == word.shape
+    assert rmse(out, word) < 0.01  # cm
+
+
+def test_rollout_starts_at_y0_and_ends_at_the_goal(word, word_dmp):
+    out = rollout(word_dmp)
+    assert_array_equal(out[0], word[0])
+    assert_allclose(out[-1], word[-1], atol=1e-3)
+
+
+def test_the_same_default_basis_count_holds_for_short_and_long_words():
+    for n in (500, 2000):
+        points = word_like(n, loops=round(12 * n / 1000))
+        assert rmse(rollout(fit_dmp(points)), points) < 0.01
+
+
+def test_a_demonstration_that_starts_moving_leaves_the_documented_transient():
+    # the DMP starts at rest: a stroke at constant speed v0 is followed with -v0 t exp(-w t)
+    t = np.linspace(0.0, 1.0, 1000)
+    stroke = np.column_stack([20.0 * t, np.zeros_like(t)])
+    error = rollout(fit_dmp(stroke))[:, 0] - stroke[:, 0]
+    omega = math.sqrt(dmp_module.STIFFNESS)
+    assert_allclose(error, -20.0 * t * np.exp(-omega * t), atol=1e-4)
+
+
+# ----------------------------------------------------------------------------- generalisation
+
+
+def test_a_new_goal_adds_a_smooth_transition_and_keeps_the_shape(word_dmp):
+    # The modified (Hoffmann/Pastor) DMP is linear in the goal: a new goal adds
+    # (goal_new - goal) * s(t), s the zero-weight DMP from 0 to 1 (computed here by RK4),
+    # so the written shape is kept and only shifted smoothly towards the new end.
+    shift = np.array([1.5, -0.8])
+    moved = rollout(word_dmp, goal=word_dmp.goal + shift)
+    original = rollout(word_dmp)
+    unit = DMP(
+        weights=np.zeros((word_dmp.n_basis, 1)),
+        y0=[0.0],
+        goal=[1.0],
+        tau=word_dmp.tau,
+        stiffness=word_dmp.stiffness,
+        damping=word_dmp.damping,
+        alpha_x=word_dmp.alpha_x,
+        centres=word_dmp.centres,
+        widths=word_dmp.widths,
+        n_samples=word_dmp.n_samples,
+    )
+    s = rk4_reference(unit, word_dmp.n_samples, substeps=2)[:, 0]
+    assert np.all(np.diff(s) >= -1e-12) and 0.97 < s[-1] <= 1.0
+    assert_allclose(moved - original, np.outer(s, shift), atol=1e-6)
+    # the end point moves to the new goal (within what s has left at t = tau)
+    assert np.linalg.norm(moved[-1] - (word_dmp.goal + shift)) < 0.03 * np.linalg.norm(shift)
+
+
+def test_a_new_start_starts_there_and_still_ends_at_the_goal(word_dmp):
+    start = word_dmp.y0 + np.array([-2.0, 1.0])
+    out = rollout(word_dmp, y0=start)
+    assert_array_equal(out[0], start)
+    assert np.linalg.norm(out[-1] - word_dmp.goal) < 0.03 * math.sqrt(5.0)
+
+
+def test_a_slower_tempo_traces_the_same_path(word_dmp):
+    path = rollout(word_dmp)
+    assert_allclose(rollout(word_dmp, tau=2 * word_dmp.tau), path, atol=1e-12)
+    # twice the duration at the same step: twice the samples, the same path every other sample
+    slow = rollout(word_dmp, tau=2 * word_dmp.tau, dt=word_dmp.tau / (word_dmp.n_samples - 1))
+    assert slow.shape[0] == 2 * word_dmp.n_samples - 1
+    assert_allclose(slow[::2], path, atol=1e-4)  # both within 1 µm of the exact ODE solution
+
+
+# ----------------------------------------------------------------------------- exactness
+
+
+def test_vectorised_rollout_matches_a_per_step_rk4_integration(word_dmp):
+    # what is left is the cubic interpolation of the input between samples: ~1e-5 cm here
+    reference = rk4_reference(word_dmp, word_dmp.n_samples)
+    assert_allclose(rollout(word_dmp), reference, rtol=0, atol=5e-5)
+    # and it shrinks like h^4 on finer grids: 2x the samples, ~16x closer
+    finer = rollout(word_dmp, n_samples=2 * word_dmp.n_samples - 1)[::2]
+    assert np.abs(finer - reference).max() < np.abs(rollout(word_dmp) - reference).max() / 8
+
+
+def test_rollout_matches_rk4_with_new_start_goal_tempo_and_few_samples(word_dmp):
+    # 300 samples for 200 basis functions: the rollout integrates on a finer grid
+    kwargs = {"y0": [1.0, 2.0], "goal": [18.0, -1.0], "tau": 1.7}
+    out = rollout(word_dmp, n_samples=300, **kwargs)
+    assert_allclose(out, rk4_reference(word_dmp, 300, substeps=30, **kwargs), rtol=0, atol=5e-5)
+
+
+def test_the_banded_design_matrix_equals_the_dense_one():
+    x = np.exp(-dmp_module.ALPHA_X * np.linspace(-0.2, 1.2, 2001))
+    for n_basis in (1, 3, 25, 26, 60, 75, 200, 500):
+        centres, widths = basis_functions(n_basis)
+        start, values = dmp_module._design_band(x, centres, widths)
+        banded = dmp_module._dense(start, values, n_basis)
+        assert_allclose(banded, design_matrix(x, centres, widths), rtol=0, atol=1e-15)
+
+
+# ----------------------------------------------------------------------------- the fit
+
+
+def test_basis_functions_are_evenly_spaced_in_time_with_widths_from_the_spacing():
+    centres, widths = basis_functions(50, alpha_x=3.0)
+    assert_allclose(-np.log(centres) / 3.0, np.linspace(0, 1, 50), atol=1e-15)
+    spacing = centres[:-1] - centres[1:]
+    assert_allclose(widths[:-1], 1 / (2 * spacing**2))
+    assert widths[-1] == widths[-2]
+
+
+def test_five_point_differences_make_targets_exact_for_quartic_paths():
+    t = np.linspace(0.0, 2.0, 41)  # tau = 2
+    y = np.column_stack([t**4 - 3 * t**3 + t, 2 * t**2 - t**4 / 5])
+    yd = np.column_stack([4 * t**3 - 9 * t**2 + 1, 4 * t - 4 * t**3 / 5])
+    ydd = np.column_stack([12 * t**2 - 18 * t, 4 - 12 * t**2 / 5])
+    k, d, a = 100.0, 20.0, 3.0
+    x, targets = forcing_targets(y, tau=2.0, stiffness=k, damping=d, alpha_x=a)
+    assert_allclose(x, np.exp(-a * t / 2.0))
+    g, y0 = y[-1], y[0]
+    expected = (4 * ydd + d * 2 * yd) / k - (g - y) + np.outer(x, g - y0)
+    assert_allclose(targets, expected, atol=1e-9)
+
+
+def _design_for(dmp: DMP, n: int) -> np.ndarray:
+    """The design matrix from the docstring formula, built here from the DMP's fields."""
+    x = np.exp(-dmp.alpha_x * np.arange(n) / (n - 1))
+    psi = np.exp(-dmp.widths * (x[:, None] - dmp.centres) ** 2)
+    return x[:, None] * psi / psi.sum(axis=1, keepdims=True)
+
+
+def test_fit_is_the_single_ridge_solution_for_all_weights_and_dims():
+    points = word_like(400, loops=5)
+    lam = 1e-6
+    dmp = fit_dmp(points, tau=1.5, n_basis=60, regularisation=lam)
+    _, targets = forcing_targets(points, tau=1.5)
+    phi = _design_for(dmp, 400)
+    # ridge on the mean squared error = least squares on the stacked system
+    stacked = np.vstack([phi / math.sqrt(400), math.sqrt(lam) * np.eye(60)])
+    padded = np.vstack([targets / math.sqrt(400), np.zeros((60, 2))])
+    expected = np.linalg.lstsq(stacked, padded, rcond=None)[0]
+    assert dmp.weights.shape == (60, 2)
+    assert_allclose(dmp.weights, expected, rtol=1e-7, atol=1e-9 * np.abs(expected).max())
+
+
+def test_without_regularisation_the_fit_is_plain_least_squares():
+    points = word_like(300, loops=4)
+    dmp = fit_dmp(points, n_basis=40, regularisation=0.0)
+    _, targets = forcing_targets(points)
+    expected = np.linalg.lstsq(_design_for(dmp, 300), targets, rcond=None)[0]
+    assert_allclose(dmp.weights, expected, rtol=1e-8, atol=1e-10 * np.abs(expected).max())
+
+
+def test_basis_count_scales_with_points_and_is_clipped():
+    assert basis_count(1000, per_100_points=20, minimum=5, maximum=900) == 200
+    assert basis_count(10, per_100_points=20, minimum=15, maximum=900) == 15
+    assert basis_count(10_000, per_100_points=20, minimum=5, maximum=300) == 300
+    counts = [basis_count(n) for n in range(1, 5000, 37)]
+    assert counts == sorted(counts)
+    assert fit_dmp(word_like(700, loops=8)).n_basis == basis_count(700)
+
+
+# ----------------------------------------------------------------------------- storage
+
+
+def test_to_dict_from_dict_round_trip_through_json_gives_identical_rollouts(word_dmp):
+    text = json.dumps(word_dmp.to_dict())
+    restored = DMP.from_dict(json.loads(text))
+    assert restored.n_basis == word_dmp.n_basis and restored.tau == word_dmp.tau
+    assert_array_equal(rollout(restored), rollout(word_dmp))
+    assert_array_equal(rollout(restored, goal=[3.0, 3.0]), rollout(word_dmp, goal=[3.0, 3.0]))
+
+
+def test_dmp_arrays_are_read_only(word_dmp):
+    with pytest.raises(ValueError, match="read-only"):
+        word_dmp.weights[0, 0] = 1.0
+
+
+# ----------------------------------------------------------------------------- bad inputs
+
+
+@pytest.mark.parametrize(
+    ("points", "kwargs", "match"),
+    [
+        ([[0, 0], [1, np.nan], [2, 0]], {}, "points: expected finite"),
+        ([[0, 0], [1, np.inf], [2, 0]], {}, "points: expected finite"),
+        ([[0, 0], [1, 1]], {}, r"points: .*n >= 3"),
+        ([0.0, 1.0, 2.0], {}, "points: expected a 2-D array"),
+        (np.zeros((4, 2, 2)), {}, "points: expected a 2-D array"),
+        (np.zeros((5, 0)), {}, r"points: .*dims >= 1"),
+        ([["a", "b"], ["c", "d"], ["e", "f"]], {}, "points: expected an array of numbers"),
+        (np.zeros((5, 2)), {"n_basis": 0}, "n_basis: expected an integer >= 1"),
+        (np.zeros((5, 2)), {"n_basis": 2.5}, "n_basis: expected an integer >= 1"),
+        (np.zeros((5, 2)), {"tau": 0.0}, "tau: expected a number > 0"),
+        (np.zeros((5, 2)), {"tau": -1.0}, "tau: expected a number > 0"),
+        (np.zeros((5, 2)), {"tau": np.nan}, "tau: expected a finite number"),
+        (np.zeros((5, 2)), {"regularisation": -1e-3}, "regularisation: expected a number >= 0"),
+    ],
+)
+def test_bad_fit_inputs_raise_value_error_naming_the_argument(points, kwargs, match):
+    with pytest.raises(ValueError, match=match) as info:
+        fit_dmp(points, **kwargs)
+    assert isinstance(info.value, UsageError)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"n_samples": 1}, "n_samples: expected an integer >= 2"),
+        ({"goal": [1.0, 2.0, 3.0]}, r"goal: expected shape \(2,\)"),
+        ({"y0": [np.nan, 0.0]}, "y0: expected finite"),
+        ({"tau": 0}, "tau: expected a number > 0"),
+        ({"dt": -0.1}, "dt: expected a number > 0"),
+        ({"dt": 0.1, "n_samples": 10}, "n_samples, dt: give one"),
+    ],
+)
+def test_bad_rollout_inputs_raise_value_error_naming_the_argument(word_dmp, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        rollout(word_dmp, **kwargs)
+
+
+def test_from_dict_rejects_incomplete_or_inconsistent_data(word_dmp):
+    data = word_dmp.to_dict()
+    with pytest.raises(ValueError, match=r"missing keys \['widths'\]"):
+        DMP.from_dict({k: v for k, v in data.items() if k != "widths"})
+    with pytest.raises(ValueError, match=r"centres: expected shape"):
+        DMP.from_dict({**data, "centres": data["centres"][:-1]})
+    with pytest.raises(ValueError, match="n_basis"):
+        DMP.from_dict({**data, "n_basis": 3})
+
+
+def test_basis_count_rejects_bad_bounds():
+    with pytest.raises(ValueError, match="maximum: expected an integer >= 30"):
+        basis_count(100, minimum=30, maximum=10)
+    with pytest.raises(ValueError, match="per_100_points: expected a number > 0"):
+        basis_count(100, per_100_points=0)
+
+
+# ----------------------------------------------------------------------------- robustness
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    points=st.integers(3, 300).flatmap(
+        lambda n: arrays(np.float64, (n, 2), elements=st.floats(-100.0, 100.0))
+    ),
+    tau=st.floats(0.05, 20.0),
+    goal_shift=arrays(np.float64, 2, elements=st.floats(-50.0, 50.0)),
+)
+def test_any_bounded_finite_points_give_finite_rollouts(points, tau, goal_shift):
+    dmp = fit_dmp(points, tau=tau)
+    assert np.all(np.isfinite(dmp.weights))
+    out = rollout(dmp)
+    assert out.shape == points.shape and np.all(np.isfinite(out))
+    moved = rollout(dmp, goal=points[-1] + goal_shift, n_samples=50)
+    assert np.all(np.isfinite(moved))
