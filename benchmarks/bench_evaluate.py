@@ -9,8 +9,8 @@ the same decoder (``torch.no_grad``). Ratio = estimator samples/s / decoder samp
 trajectory conditional log p(x_T | x_S). The two sides alternate ``--reps`` times; medians are
 compared.
 
-Memory: each configuration runs in a fresh subprocess that reports its peak resident memory
-(``ru_maxrss``) above the memory it held before estimating: K = 5000 for the image and
+Memory (Linux): each configuration runs in a fresh subprocess that reports its peak resident
+memory (``VmHWM``, reset just before) above the memory it held before estimating: K = 5000 for the image and
 trajectory conditionals at several ``chunk_rows`` (the bound: decoder outputs alive at once),
 and, as the reference, the unchunked estimate (all K samples at once) of the trajectory cell.
 The memory runs use a batch of ``MEMORY_BATCH`` test samples to keep the image runs short; the
@@ -25,7 +25,6 @@ from __future__ import annotations
 import argparse
 import json
 import platform
-import resource
 import statistics
 import subprocess
 import sys
@@ -92,15 +91,29 @@ def throughput(model, data, cell, k, chunk_rows, reps):
     }
 
 
+def _vm_kib(field: str) -> int:
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith(field + ":"):
+            return int(line.split()[1])
+    raise RuntimeError(f"{field} not in /proc/self/status")
+
+
 def _peak_child(cell: str, k: int, chunk_rows: int) -> None:
-    """Runs in a subprocess: print the peak RSS increase (MiB) of one estimate."""
+    """Runs in a subprocess: print the peak RSS increase (MiB) of one estimate.
+
+    The kernel's peak-RSS mark is reset just before the estimate (``5`` to
+    ``/proc/self/clear_refs``), so set-up peaks (imports, model construction) do not hide it.
+    """
     model, data = make_model_and_data(MEMORY_BATCH)
     target, given = CELLS[cell]
     estimate_cell(model, target, given, data, 1, MEMORY_BATCH, chunk_rows)  # warm up allocators
-    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    Path("/proc/self/clear_refs").write_text("5")
+    before = _vm_kib("VmRSS")
     estimate_cell(model, target, given, data, k, MEMORY_BATCH, chunk_rows)
-    after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    print(json.dumps({"peak_mib": round((after - before) / 1024, 1), "rss_mib": after / 1024}))
+    peak = _vm_kib("VmHWM")
+    print(
+        json.dumps({"peak_mib": round((peak - before) / 1024, 1), "rss_before_mib": before // 1024})
+    )
 
 
 def peak_memory(cell: str, k: int, chunk_rows: int) -> dict:

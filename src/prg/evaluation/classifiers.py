@@ -445,8 +445,10 @@ def ensure_classifiers(
     ``<out_dir>/<modality>.pt`` is reused when its meta's data fingerprint equals
     :func:`data_fingerprint` of ``data_dir``, its cfg equals ``cfg`` and its twin table equals
     :data:`SHAPE_TWINS` (its folded accuracy is then current); otherwise (also when the file is
-    damaged, with a logged warning) the classifier is trained on the train split (val selects the epoch), scored on the real (non-augmented)
-    samples of the test split and saved. ``<out_dir>/metrics.json`` gets the accuracies of both.
+    damaged, with a logged warning) the classifier is trained on the train split (val selects
+    the epoch), scored on the real (non-augmented) samples of the test split and saved.
+    ``<out_dir>/metrics.json`` gets the accuracies of both when either was trained (or when it
+    is missing).
 
     Parameters
     ----------
@@ -476,6 +478,7 @@ def ensure_classifiers(
 
     models: dict[str, nn.Module] = {}
     metrics: dict[str, Any] = {}
+    trained = False
     for modality in MODALITIES:
         path = out_dir / f"{modality}.pt"
         model, meta = _reusable(path, modality, fingerprint, settings)
@@ -502,11 +505,15 @@ def ensure_classifiers(
                 "shape_twins": list(SHAPE_TWINS),
             }
             save_classifier(path, model, modality, meta)
+            trained = True
         models[modality] = model
         metrics[modality] = {
             k: meta[k]
             for k in ("test_accuracy", "test_folded_accuracy", "val_accuracy", "train_seconds")
         }
-    out_dir.mkdir(parents=True, exist_ok=True)
-    _write_json(out_dir / "metrics.json", {**metrics, "data_fingerprint": fingerprint})
+    # rewritten only when something changed: a reuse (e.g. by prg-evaluate after the DVC
+    # `classifiers` stage) must not touch another stage's output
+    if trained or not (out_dir / "metrics.json").is_file():
+        out_dir.mkdir(parents=True, exist_ok=True)
+        _write_json(out_dir / "metrics.json", {**metrics, "data_fingerprint": fingerprint})
     return models
