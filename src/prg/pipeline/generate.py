@@ -1,0 +1,211 @@
+"""Generate: per-letter latent -> trajectory -> laid-out word -> connection strokes -> one DMP.
+
+:func:`decode_letters` runs the model's generation map psi'_T on per-letter inputs (any subset of
+modalities the family accepts; extra modalities a family cannot use are dropped and reported).
+:func:`write_word` then applies the final processing map (``prg.pipeline.layout``: sizes and
+baseline; ``prg.pipeline.connect``: connection strokes) and fits one DMP to the whole word
+(``prg.pipeline.dmp``).
+
+Timing: a DMP starts and ends at rest, so the word is not fitted at constant pen speed (its
+first samples would need an initial velocity the DMP does not have: an error of about 3 % of the
+path length near the start). :func:`rest_to_rest_samples` resamples the path uniformly in time
+under a speed profile that rises and falls with half-cosine ramps of ``ramp_s`` seconds and is
+constant in between; the mean speed over the word stays ``speed_cm_s``.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+
+from prg.data.alphabet import text_to_labels
+from prg.errors import UsageError
+from prg.models.base import MODALITIES, MultimodalVAE
+from prg.pipeline.connect import ConnectionParams, connect_sequence
+from prg.pipeline.dmp import basis_count, fit_dmp, rollout
+from prg.pipeline.layout import LayoutParams, layout_letters, word_breaks
+from prg.pipeline.word import DEFAULT_SPEED_CM_S, WordTrajectory, assemble_word
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class GenerateParams:
+    """How a word is generated and timed (all config values, ``conf/write.yaml``).
+
+    temperature : 0 decodes each letter's posterior mean; > 0 draws latents with their std
+        scaled by it (variety), reproducibly for ``seed``.
+    method : ``"alg1"`` (the paper's connection algorithm) or ``"straight"``.
+    speed_cm_s : mean pen speed over the word; ``ramp_s`` : start/stop ramp duration.
+    samples_per_s : DMP demonstration samples per second of writing.
+    basis_per_100_samples : DMP basis functions per 100 demonstration samples.
+    """
+
+    temperature: float = 0.0
+    seed: int = 0
+    method: str = "alg1"
+    speed_cm_s: float = DEFAULT_SPEED_CM_S
+    ramp_s: float = 0.3
+    samples_per_s: float = 100.0
+    basis_per_100_samples: int = 20
+    layout: LayoutParams = field(default_factory=LayoutParams)
+    connection: ConnectionParams = field(default_factory=ConnectionParams)
+
+
+def usable_inputs(model: MultimodalVAE, inputs: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+    """The largest subset of ``inputs`` the family accepts; dropped modalities are logged.
+
+    Raises
+    ------
+    UsageError
+        If the family accepts none of the given modalities.
+    """
+    given = tuple(m for m in MODALITIES if m in inputs)
+    candidates = [s for s in model.accepted_inputs if set(s) <= set(given)]
+    if not candidates:
+        accepted = " or ".join("{" + ", ".join(s) + "}" for s in model.accepted_inputs)
+        raise UsageError(
+            f"{model.family} cannot use the given inputs {{{', '.join(given)}}}: it accepts "
+            f"{accepted}"
+        )
+    # prefer more modalities; among equals, the family's own order (label before image for AVAE)
+    best = max(candidates, key=len)
+    dropped = [m for m in given if m not in best]
+    if dropped:
+        log.warning("%s uses %s; ignoring %s", model.family, list(best), dropped)
+    return {m: inputs[m] for m in best}
+
+
+@torch.no_grad()
+def decode_letters(
+    model: MultimodalVAE, inputs: dict[str, torch.Tensor], temperature: float = 0.0, seed: int = 0
+) -> np.ndarray:
+    """One generated trajectory per letter.
+
+    Parameters
+    ----------
+    model : MultimodalVAE
+    inputs : dict
+        Per-letter model inputs, each with N rows (``label`` (N,), ``traj`` (N, 200), ``image``
+        (N, 1, 28, 28)).
+    temperature, seed : see :class:`GenerateParams`.
+
+    Returns
+    -------
+    ndarray, shape (N, 100, 2)
+        Normalised letter trajectories (y up), as the training data.
+    """
+    chosen = usable_inputs(model, inputs)
+    with torch.random.fork_rng(devices=[]):
+        torch.manual_seed(seed)
+        out = model.generate(chosen, "traj", n=1, temperature=temperature)[0]
+    return out.numpy().reshape(len(out), -1, 2).astype(np.float64)
+
+
+def rest_to_rest_samples(
+    points: np.ndarray, speed_cm_s: float, ramp_s: float, samples_per_s: float
+) -> tuple[np.ndarray, float]:
+    """Resample a path uniformly in time under a rest-to-rest speed profile.
+
+    Parameters
+    ----------
+    points : ndarray, shape (P, 2)
+        The path (centimetres).
+    speed_cm_s : float
+        Mean speed over the whole path (> 0).
+    ramp_s : float
+        Duration of the half-cosine speed-up and slow-down (>= 0).
+    samples_per_s : float
+        Output samples per second (> 0).
+
+    Returns
+    -------
+    samples : ndarray, shape (n, 2)
+    duration : float
+        Seconds.
+    """
+    steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    arc = np.concatenate([[0.0], np.cumsum(steps)])
+    length = arc[-1]
+    if length <= 0:
+        raise UsageError("the word trajectory has zero length: nothing to write")
+    # a profile of plateau speed v with ramps r: length = v (T - r), mean speed = length / T
+    duration = length / speed_cm_s
+    ramp = min(ramp_s, duration / 2)
+    plateau = length / (duration - ramp)
+    n = max(3, int(np.ceil(duration * samples_per_s)) + 1)
+    t = np.linspace(0.0, duration, n)
+    s = plateau * _ramped_distance(t, duration, ramp)
+    s = np.clip(s * length / s[-1], 0.0, length)
+    x = np.interp(s, arc, points[:, 0])
+    y = np.interp(s, arc, points[:, 1])
+    return np.stack([x, y], axis=1), duration
+
+
+def _ramped_distance(t: np.ndarray, duration: float, ramp: float) -> np.ndarray:
+    """Distance travelled at unit plateau speed with half-cosine ramps (closed form)."""
+    if ramp == 0:
+        return t.copy()
+
+    def up(u):  # integral of (1 - cos(pi u / ramp)) / 2 from 0 to u
+        return 0.5 * (u - ramp / np.pi * np.sin(np.pi * u / ramp))
+
+    total = duration - ramp
+    return np.where(
+        t < ramp,
+        up(t),
+        np.where(t > duration - ramp, total - up(duration - t), up(ramp) + (t - ramp)),
+    )
+
+
+def write_word(
+    model: MultimodalVAE,
+    text: str,
+    inputs: dict[str, torch.Tensor] | None = None,
+    params: GenerateParams | None = None,
+) -> tuple[WordTrajectory, np.ndarray]:
+    """Generate ``text`` with ``model`` and fit one DMP to the whole word.
+
+    Parameters
+    ----------
+    model : MultimodalVAE
+    text : str
+        Letters (0-9, A-Z, a-z) with spaces between words.
+    inputs : dict, optional
+        Per-letter inputs besides the label (``traj``, ``image``), one row per non-space
+        character. The labels of ``text`` are always added.
+    params : GenerateParams, optional
+
+    Returns
+    -------
+    word : WordTrajectory
+        Points, segments, text, timing and the fitted DMP (``word.dmp``).
+    rollout : ndarray, shape (n, 2)
+        The DMP's rollout on the demonstration's time grid.
+    """
+    params = params or GenerateParams()
+    letters = [c for c in text if c != " "]
+    labels = torch.as_tensor(text_to_labels("".join(letters)), dtype=torch.long)
+    per_letter = {"label": labels, **(inputs or {})}
+    for modality, value in per_letter.items():
+        if len(value) != len(letters):
+            raise UsageError(
+                f"{modality} inputs: {len(value)} given for the {len(letters)} letters of {text!r}"
+            )
+    trajs = decode_letters(model, per_letter, params.temperature, params.seed)
+    placed = layout_letters(list(trajs), text, params.layout)
+    connections = connect_sequence(
+        placed, params.connection, method=params.method, breaks=word_breaks(text)
+    )
+    word = assemble_word(placed, connections, text, speed_cm_s=params.speed_cm_s)
+    samples, duration = rest_to_rest_samples(
+        word.points, params.speed_cm_s, params.ramp_s, params.samples_per_s
+    )
+    n_basis = basis_count(len(samples), per_100_points=params.basis_per_100_samples)
+    dmp = fit_dmp(samples, tau=duration, n_basis=n_basis)
+    word.dmp = dmp.to_dict()
+    word.duration_s = duration
+    return word, rollout(dmp)
