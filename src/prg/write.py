@@ -1,0 +1,145 @@
+"""``prg-write``: write a word with a trained model — letters, connection strokes, one DMP.
+
+Examples
+--------
+``prg-write text=hello``                          MUSE from ``models/muse/model.ckpt``
+``prg-write text="the cat" family=avae_ts generate.method=straight``
+``prg-write text=joy ckpt=checkpoints/prg/muse-seed0/best.ckpt generate.temperature=0.5``
+
+Writes ``word.json`` (points, segments, text, timing, DMP), ``word.png``, ``word.svg`` and
+``dmp_rollout.csv`` into ``out_dir`` (atomically, through a staging folder) and, with
+``mlflow=true``, an MLflow run holding them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import os
+import shutil
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from omegaconf import DictConfig, OmegaConf
+
+from prg.cli import hydra_command
+from prg.errors import UsageError
+from prg.models.checkpoint import load_model
+from prg.pipeline.connect import ConnectionParams
+from prg.pipeline.generate import GenerateParams, write_word
+from prg.pipeline.layout import LayoutParams
+from prg.pipeline.word import WordTrajectory
+
+log = logging.getLogger(__name__)
+
+
+def params_from_config(cfg: DictConfig) -> GenerateParams:
+    """The generation, layout and connection settings as :class:`GenerateParams`."""
+    connection = OmegaConf.to_container(cfg.connection, resolve=True)
+    connection["alpha_max"] = math.radians(connection.pop("alpha_max_deg"))
+    try:
+        return GenerateParams(
+            **OmegaConf.to_container(cfg.generate, resolve=True),
+            layout=LayoutParams(**OmegaConf.to_container(cfg.layout, resolve=True)),
+            connection=ConnectionParams(**connection),
+        )
+    except (TypeError, ValueError) as err:
+        raise UsageError(f"write settings: {err}") from None
+
+
+def write(cfg: DictConfig) -> tuple[WordTrajectory, Path]:
+    """Task: generate ``cfg.text`` and save the word, its renderings and its DMP rollout."""
+    text = str(cfg.text)
+    if not text.strip():
+        raise UsageError("text is empty: give the word to write, e.g. text=hello")
+    params = params_from_config(cfg)
+    if params.method not in ("alg1", "straight"):
+        raise UsageError(f"generate.method {params.method!r}: choose alg1 or straight")
+    ckpt = Path(cfg.ckpt) if cfg.ckpt else Path(cfg.models_dir) / cfg.family / "model.ckpt"
+    model, _ = load_model(ckpt)
+    start = time.perf_counter()
+    word, path = write_word(model, text.strip(), params=params)
+    seconds = time.perf_counter() - start
+    out_dir = Path(cfg.out_dir)
+    _save(word, path, out_dir)
+    log.info(
+        "wrote %r with %s in %.0f ms: %d points, %.1f cm, %.1f s, DMP %d bases -> %s",
+        text,
+        model.family,
+        seconds * 1000,
+        len(word.points),
+        word.path_length,
+        word.duration_s,
+        word.dmp["n_basis"],
+        out_dir,
+    )
+    if cfg.mlflow:
+        _log_run(cfg, word, out_dir, model.family, str(ckpt), seconds)
+    return word, out_dir
+
+
+def _save(word: WordTrajectory, path: np.ndarray, out_dir: Path) -> None:
+    out_dir.parent.mkdir(parents=True, exist_ok=True)
+    staging = out_dir.parent / f".{out_dir.name}.tmp-{os.getpid()}"
+    shutil.rmtree(staging, ignore_errors=True)
+    staging.mkdir()
+    try:
+        word.to_json(staging / "word.json")
+        word.to_png(staging / "word.png")
+        word.to_svg(staging / "word.svg")
+        t = np.linspace(0.0, word.duration_s, len(path))
+        np.savetxt(
+            staging / "dmp_rollout.csv",
+            np.column_stack([t, path]),
+            delimiter=",",
+            header="t_s,x_cm,y_cm",
+            comments="",
+            fmt="%.6f",
+        )
+        out_dir.mkdir(exist_ok=True)
+        for item in staging.iterdir():
+            os.replace(item, out_dir / item.name)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+
+
+def _log_run(cfg, word, out_dir: Path, family: str, ckpt: str, seconds: float) -> None:
+    from mlflow import MlflowClient
+
+    from prg.tracking import artifact_location, get_experiment_id, tracking_uri
+
+    client = MlflowClient(tracking_uri(cfg.logger.get("tracking_uri"), cfg.paths.root_dir))
+    experiment = get_experiment_id(
+        client, cfg.logger.experiment_name, artifact_location(cfg.logger.artifact_location)
+    )
+    run = client.create_run(
+        experiment,
+        run_name=cfg.run_name,
+        tags={"prg.task": "write", "prg.family": family, "prg.text": word.text},
+    )
+    run_id = run.info.run_id
+    params: dict[str, Any] = {"text": word.text, "family": family, "ckpt": ckpt}
+    params.update(
+        {f"generate.{k}": v for k, v in dataclasses.asdict(params_from_config(cfg)).items()}
+    )
+    for key, value in params.items():
+        client.log_param(run_id, key, str(value)[:500])
+    for key, value in {
+        "write/latency_ms": seconds * 1000,
+        "write/points": len(word.points),
+        "write/path_length_cm": word.path_length,
+        "write/duration_s": word.duration_s,
+        "write/dmp_basis": word.dmp["n_basis"],
+    }.items():
+        client.log_metric(run_id, key, float(value))
+    client.log_artifacts(run_id, str(out_dir), "word")
+    client.set_terminated(run_id)
+
+
+main = hydra_command(write, "write", "prg-write")
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,86 @@
+"""`prg-write`: text -> word.json/png/svg + DMP rollout + MLflow run; bad input gets one line."""
+
+import csv
+import json
+from pathlib import Path
+
+import pytest
+import torch
+from mlflow import MlflowClient
+
+from prg.cli import compose_config
+from prg.models.module import PRGModule
+from prg.pipeline.word import WordTrajectory
+from prg.tracking import sqlite_uri
+from tests.conftest import run_cli
+
+
+@pytest.fixture(scope="module")
+def checkpoint(tmp_path_factory) -> Path:
+    """An untrained MUSE saved the way training saves it (plumbing, not handwriting quality)."""
+    from omegaconf import OmegaConf
+
+    node = OmegaConf.to_container(
+        compose_config("train", ["model=muse"]).model.module, resolve=True
+    )
+    torch.manual_seed(0)
+    module = PRGModule(model=node["model"], optimizer=node["optimizer"])
+    path = tmp_path_factory.mktemp("ckpt") / "muse.ckpt"
+    torch.save({"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams)}, path)
+    return path
+
+
+def test_writes_the_word_its_renderings_rollout_and_an_mlflow_run(tmp_path, checkpoint):
+    out = tmp_path / "out"
+    result = run_cli(
+        "prg-write",
+        "text=ab cd",
+        f"ckpt={checkpoint}",
+        f"out_dir={out}",
+        f"paths.root_dir={tmp_path}",
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert {p.name for p in out.iterdir()} == {
+        "word.json",
+        "word.png",
+        "word.svg",
+        "dmp_rollout.csv",
+    }
+    word = WordTrajectory.from_json(out / "word.json")
+    assert word.text == "ab cd" and [c for c, _ in word.letters] == list("abcd")
+    assert json.loads((out / "word.json").read_text())["dmp"]["n_basis"] >= 20
+    with open(out / "dmp_rollout.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert float(rows[0]["t_s"]) == 0.0
+    assert float(rows[-1]["t_s"]) == pytest.approx(word.duration_s, rel=1e-6)
+    client = MlflowClient(sqlite_uri(tmp_path / "mlruns.db"))
+    (run,) = client.search_runs(
+        [client.get_experiment_by_name("prg").experiment_id], "tags.`prg.task` = 'write'"
+    )
+    assert run.data.params["text"] == "ab cd"
+    assert run.data.metrics["write/points"] == len(word.points)
+    artifacts = {a.path for a in client.list_artifacts(run.info.run_id, "word")}
+    assert "word/word.json" in artifacts and "word/word.png" in artifacts
+
+
+BAD = [
+    (["text= "], "text is empty"),
+    (["text=h@llo"], "unsupported characters '@'"),
+    (["text=hi", "ckpt={tmp}/none.ckpt"], "does not exist"),
+    (["text=hi", "generate.method=zigzag"], "alg1 or straight"),
+    (["text=hi", "generate.speed_cm_s=-1"], "speed"),
+]
+
+
+@pytest.mark.parametrize("args, expected", BAD, ids=[" ".join(a) for a, _ in BAD])
+def test_bad_input_gets_one_line_and_exit_2(tmp_path, checkpoint, args, expected):
+    out = tmp_path / "out"
+    args = [a.format(tmp=tmp_path) for a in args]
+    if not any(a.startswith("ckpt=") for a in args):
+        args.append(f"ckpt={checkpoint}")
+    result = run_cli("prg-write", *args, f"out_dir={out}", f"paths.root_dir={tmp_path}")
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode == 2, result.stderr[-2000:]
+    assert len(lines) == 1 and lines[0].startswith("prg-write: error:"), lines
+    assert expected in lines[0]
+    assert not out.exists()
