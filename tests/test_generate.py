@@ -13,6 +13,8 @@ from prg.models.muse import MUSE
 from prg.pipeline.generate import (
     GenerateParams,
     decode_letters,
+    infer_text,
+    label_inputs,
     rest_to_rest_samples,
     usable_inputs,
     write_word,
@@ -74,7 +76,9 @@ def test_rest_to_rest_timing_keeps_the_path_and_the_mean_speed():
 
 def test_a_word_is_laid_out_connected_and_reproduced_by_one_dmp():
     torch.manual_seed(0)
-    word, path = write_word(MUSE().eval(), "ab cd", params=GenerateParams(samples_per_s=150))
+    word, path = write_word(
+        MUSE().eval(), "ab cd", label_inputs("ab cd"), GenerateParams(samples_per_s=150)
+    )
     assert [c for c, _ in word.letters] == list("abcd")
     assert word.segment_kinds.count("connection") == 2 and word.segment_kinds.count("space") == 1
     assert word.dmp["n_basis"] >= 20 and word.duration_s > 0
@@ -88,4 +92,13 @@ def test_a_word_is_laid_out_connected_and_reproduced_by_one_dmp():
 
 def test_inputs_must_match_the_letters():
     with pytest.raises(UsageError, match="image inputs: 2 given for the 3 letters"):
-        write_word(MUSE().eval(), "abc", inputs={"image": torch.rand(2, 1, 28, 28)})
+        write_word(MUSE().eval(), "abc", {"image": torch.rand(2, 1, 28, 28)})
+
+
+def test_text_is_read_from_images_by_a_family_that_generates_labels():
+    torch.manual_seed(0)
+    images = {"image": torch.rand(3, 1, 28, 28)}
+    text = infer_text(MUSE().eval(), images)
+    assert len(text) == 3 and text.isalnum()
+    with pytest.raises(UsageError, match="avae_ti cannot read letters"):
+        infer_text(AVAE(("traj", "image")).eval(), images)

@@ -63,8 +63,53 @@ def test_writes_the_word_its_renderings_rollout_and_an_mlflow_run(tmp_path, chec
     assert "word/word.json" in artifacts and "word/word.png" in artifacts
 
 
+def _word_image(data_dir: Path, path: Path, n: int = 3) -> list[int]:
+    """Dark-on-light word image of ``n`` test letters, upscaled and set apart; their labels."""
+    import numpy as np
+    from PIL import Image
+
+    from prg.data.store import load_split
+
+    test = load_split(data_dir / "prepared/synthetic/test.npz")
+    canvas = Image.new("L", (n * 140 + 20, 160), 255)
+    for i in range(n):
+        letter = Image.fromarray(255 - test["image"][i]).resize((112, 112))
+        canvas.paste(letter, (20 + 140 * i, 24))
+    canvas.save(path)
+    return [int(v) for v in np.asarray(test["label"][:n])]
+
+
+def test_images_channel_alone_or_with_the_text(tmp_path, checkpoint, small_dataset):
+    image = tmp_path / "word.png"
+    labels = _word_image(small_dataset, image)
+    from prg.data.alphabet import label_to_char
+
+    text = "".join(label_to_char(v) for v in labels)
+    for args, expected_text in (
+        (["images=" + str(image), f"text={text}"], text),
+        (["images=" + str(image)], None),
+    ):
+        out = tmp_path / f"out{len(args)}"
+        result = run_cli(
+            "prg-write",
+            *args,
+            f"ckpt={checkpoint}",
+            f"out_dir={out}",
+            f"paths.root_dir={tmp_path}",
+            "mlflow=false",
+        )
+        assert result.returncode == 0, result.stderr[-2000:]
+        word = WordTrajectory.from_json(out / "word.json")
+        assert len(word.letters) == 3  # the three letters were segmented and written
+        if expected_text:
+            assert word.text == expected_text
+
+
 BAD = [
     (["text= "], "text is empty"),
+    (["mlflow=false"], "nothing to write"),
+    (["images={tmp}/none.png"], "none.png"),
+    (["text=abcd", "images={tmp}"], "holds no"),
     (["text=h@llo"], "unsupported characters '@'"),
     (["text=hi", "ckpt={tmp}/none.ckpt"], "does not exist"),
     (["text=hi", "generate.method=zigzag"], "alg1 or straight"),

@@ -5,6 +5,12 @@ Examples
 ``prg-write text=hello``                          MUSE from ``models/muse/model.ckpt``
 ``prg-write text="the cat" family=avae_ts generate.method=straight``
 ``prg-write text=joy ckpt=checkpoints/prg/muse-seed0/best.ckpt generate.temperature=0.5``
+``prg-write images=word.png``                     one image of a word (letters apart), MUSE
+``prg-write images=letters/ text=cat``            per-letter images (sorted by name) + the text
+
+Channels: ``text`` is the S channel (the labels, as a speech recogniser yields them) and the
+layout; ``images`` (a word image, segmented into letters, or a folder of letter images) is the I
+channel. Without ``text`` the letters are read from the images by the model (S given I).
 
 Writes ``word.json`` (points, segments, text, timing, DMP), ``word.png``, ``word.svg`` and
 ``dmp_rollout.csv`` into ``out_dir`` (atomically, through a staging folder) and, with
@@ -23,14 +29,16 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import torch
 from omegaconf import DictConfig, OmegaConf
 
 from prg.cli import hydra_command
 from prg.errors import UsageError
 from prg.models.checkpoint import load_model
 from prg.pipeline.connect import ConnectionParams
-from prg.pipeline.generate import GenerateParams, write_word
+from prg.pipeline.generate import GenerateParams, infer_text, label_inputs, write_word
 from prg.pipeline.layout import LayoutParams
+from prg.pipeline.perceive import load_image, perceive_letter_images, segment_word_image
 from prg.pipeline.word import WordTrajectory
 
 log = logging.getLogger(__name__)
@@ -50,18 +58,42 @@ def params_from_config(cfg: DictConfig) -> GenerateParams:
         raise UsageError(f"write settings: {err}") from None
 
 
+def image_inputs(path: str | os.PathLike) -> torch.Tensor:
+    """The I channel from a word image (segmented into letters) or a folder of letter images."""
+    path = Path(path)
+    if path.is_dir():
+        files = sorted(p for p in path.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+        if not files:
+            raise UsageError(f"images folder {path} holds no {'/'.join(IMAGE_SUFFIXES)} files")
+        letters = [load_image(f) for f in files]
+    else:
+        letters = segment_word_image(load_image(path))
+    return torch.from_numpy(perceive_letter_images(letters))
+
+
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
+
+
 def write(cfg: DictConfig) -> tuple[WordTrajectory, Path]:
-    """Task: generate ``cfg.text`` and save the word, its renderings and its DMP rollout."""
-    text = str(cfg.text)
-    if not text.strip():
+    """Task: generate the word and save it, its renderings and its DMP rollout."""
+    text = None if cfg.text is None else str(cfg.text).strip()
+    if cfg.text is not None and not text:
         raise UsageError("text is empty: give the word to write, e.g. text=hello")
+    if text is None and cfg.images is None:
+        raise UsageError("nothing to write: give text=WORD and/or images=PATH")
     params = params_from_config(cfg)
     if params.method not in ("alg1", "straight"):
         raise UsageError(f"generate.method {params.method!r}: choose alg1 or straight")
     ckpt = Path(cfg.ckpt) if cfg.ckpt else Path(cfg.models_dir) / cfg.family / "model.ckpt"
     model, _ = load_model(ckpt)
+    inputs = label_inputs(text) if text is not None else {}
+    if cfg.images is not None:
+        inputs["image"] = image_inputs(cfg.images)
     start = time.perf_counter()
-    word, path = write_word(model, text.strip(), params=params)
+    if text is None:
+        text = infer_text(model, inputs)
+        log.info("read %r from the images", text)
+    word, path = write_word(model, text, inputs, params)
     seconds = time.perf_counter() - start
     out_dir = Path(cfg.out_dir)
     _save(word, path, out_dir)

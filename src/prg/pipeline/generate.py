@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import torch
 
-from prg.data.alphabet import text_to_labels
+from prg.data.alphabet import label_to_char, text_to_labels
 from prg.errors import UsageError
 from prg.models.base import MODALITIES, MultimodalVAE
 from prg.pipeline.connect import ConnectionParams, connect_sequence
@@ -161,22 +161,35 @@ def _ramped_distance(t: np.ndarray, duration: float, ramp: float) -> np.ndarray:
     )
 
 
+def infer_text(model: MultimodalVAE, inputs: dict[str, torch.Tensor]) -> str:
+    """The letters the model reads from the inputs (S given the inputs), for a word given without
+    its text (e.g. images only): the layout needs each letter's class."""
+    if "label" not in model.generated_modalities:
+        raise UsageError(
+            f"{model.family} cannot read letters from its inputs: give the text too (text=...)"
+        )
+    chosen = usable_inputs(model, inputs)
+    with torch.no_grad():
+        probs = model.generate(chosen, "label")[0]
+    return "".join(label_to_char(int(i)) for i in probs.argmax(-1))
+
+
 def write_word(
     model: MultimodalVAE,
     text: str,
-    inputs: dict[str, torch.Tensor] | None = None,
+    inputs: dict[str, torch.Tensor],
     params: GenerateParams | None = None,
 ) -> tuple[WordTrajectory, np.ndarray]:
-    """Generate ``text`` with ``model`` and fit one DMP to the whole word.
+    """Generate a word with ``model`` and fit one DMP to the whole word.
 
     Parameters
     ----------
     model : MultimodalVAE
     text : str
-        Letters (0-9, A-Z, a-z) with spaces between words.
-    inputs : dict, optional
-        Per-letter inputs besides the label (``traj``, ``image``), one row per non-space
-        character. The labels of ``text`` are always added.
+        The word's letters (0-9, A-Z, a-z) with spaces between words: used for the layout.
+    inputs : dict
+        Per-letter model inputs, one row per non-space character of ``text``: ``label``
+        (the S channel, e.g. :func:`label_inputs`), ``traj``, ``image`` — any subset.
     params : GenerateParams, optional
 
     Returns
@@ -188,14 +201,15 @@ def write_word(
     """
     params = params or GenerateParams()
     letters = [c for c in text if c != " "]
-    labels = torch.as_tensor(text_to_labels("".join(letters)), dtype=torch.long)
-    per_letter = {"label": labels, **(inputs or {})}
-    for modality, value in per_letter.items():
+    text_to_labels("".join(letters))  # one clear error for unsupported characters
+    if not inputs:
+        raise UsageError("no inputs: give the word through at least one channel")
+    for modality, value in inputs.items():
         if len(value) != len(letters):
             raise UsageError(
                 f"{modality} inputs: {len(value)} given for the {len(letters)} letters of {text!r}"
             )
-    trajs = decode_letters(model, per_letter, params.temperature, params.seed)
+    trajs = decode_letters(model, inputs, params.temperature, params.seed)
     placed = layout_letters(list(trajs), text, params.layout)
     connections = connect_sequence(
         placed, params.connection, method=params.method, breaks=word_breaks(text)
@@ -209,3 +223,9 @@ def write_word(
     word.dmp = dmp.to_dict()
     word.duration_s = duration
     return word, rollout(dmp)
+
+
+def label_inputs(text: str) -> dict[str, torch.Tensor]:
+    """The S channel of ``text``: one class id per non-space character."""
+    letters = "".join(c for c in text if c != " ")
+    return {"label": torch.as_tensor(text_to_labels(letters), dtype=torch.long)}
