@@ -105,11 +105,33 @@ def test_images_channel_alone_or_with_the_text(tmp_path, checkpoint, small_datas
             assert word.text == expected_text
 
 
+def test_trajectories_channel(tmp_path, checkpoint, small_dataset):
+    from prg.data.store import load_split
+
+    test = load_split(small_dataset / "prepared/synthetic/test.npz")
+    strokes = [(test["traj"][i].reshape(-1, 2) * 37 + 5).tolist() for i in range(2)]
+    path = tmp_path / "letters.json"
+    path.write_text(json.dumps({"strokes": strokes, "y_down": False}))
+    out = tmp_path / "out"
+    result = run_cli(
+        "prg-write",
+        f"trajectories={path}",
+        "text=ab",
+        f"ckpt={checkpoint}",
+        f"out_dir={out}",
+        f"paths.root_dir={tmp_path}",
+        "mlflow=false",
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert WordTrajectory.from_json(out / "word.json").text == "ab"
+
+
 BAD = [
     (["text= "], "text is empty"),
     (["mlflow=false"], "nothing to write"),
     (["images={tmp}/none.png"], "none.png"),
     (["text=abcd", "images={tmp}"], "holds no"),
+    (["trajectories={tmp}/none.json"], "does not exist"),
     (["text=h@llo"], "unsupported characters '@'"),
     (["text=hi", "ckpt={tmp}/none.ckpt"], "does not exist"),
     (["text=hi", "generate.method=zigzag"], "alg1 or straight"),

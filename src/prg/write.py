@@ -10,7 +10,8 @@ Examples
 
 Channels: ``text`` is the S channel (the labels, as a speech recogniser yields them) and the
 layout; ``images`` (a word image, segmented into letters, or a folder of letter images) is the I
-channel. Without ``text`` the letters are read from the images by the model (S given I).
+channel; ``trajectories`` (a JSON file of per-letter pen strokes) is the T channel. Without
+``text`` the letters are read from the other channels by the model (S given I and/or T).
 
 Writes ``word.json`` (points, segments, text, timing, DMP), ``word.png``, ``word.svg`` and
 ``dmp_rollout.csv`` into ``out_dir`` (atomically, through a staging folder) and, with
@@ -20,6 +21,7 @@ Writes ``word.json`` (points, segments, text, timing, DMP), ``word.png``, ``word
 from __future__ import annotations
 
 import dataclasses
+import json
 import logging
 import math
 import os
@@ -38,7 +40,12 @@ from prg.models.checkpoint import load_model
 from prg.pipeline.connect import ConnectionParams
 from prg.pipeline.generate import GenerateParams, infer_text, label_inputs, write_word
 from prg.pipeline.layout import LayoutParams
-from prg.pipeline.perceive import load_image, perceive_letter_images, segment_word_image
+from prg.pipeline.perceive import (
+    load_image,
+    perceive_letter_images,
+    perceive_trajectories,
+    segment_word_image,
+)
 from prg.pipeline.word import WordTrajectory
 
 log = logging.getLogger(__name__)
@@ -74,13 +81,38 @@ def image_inputs(path: str | os.PathLike) -> torch.Tensor:
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
 
 
+def trajectory_inputs(path: str | os.PathLike) -> torch.Tensor:
+    """The T channel from a JSON file: ``{"strokes": [[[x, y], ...], ...], "y_down": false}``
+    (one pen-down stroke per letter, any scale) or a bare list of strokes."""
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise UsageError(f"trajectories file {path} does not exist") from None
+    except (OSError, ValueError) as err:
+        raise UsageError(f"trajectories file {path} is not readable JSON ({err})") from None
+    strokes, y_down = (doc, False) if isinstance(doc, list) else (None, False)
+    if isinstance(doc, dict):
+        strokes, y_down = doc.get("strokes"), bool(doc.get("y_down", False))
+    if not isinstance(strokes, list) or not strokes:
+        raise UsageError(
+            f"trajectories file {path}: expected a non-empty list of strokes, each a list of "
+            '[x, y] points (or {"strokes": [...], "y_down": bool})'
+        )
+    try:
+        arrays = [np.asarray(stroke, dtype=np.float64) for stroke in strokes]
+    except (TypeError, ValueError):
+        raise UsageError(f"trajectories file {path}: strokes must hold [x, y] numbers") from None
+    return torch.from_numpy(perceive_trajectories(arrays, y_down=y_down))
+
+
 def write(cfg: DictConfig) -> tuple[WordTrajectory, Path]:
     """Task: generate the word and save it, its renderings and its DMP rollout."""
     text = None if cfg.text is None else str(cfg.text).strip()
     if cfg.text is not None and not text:
         raise UsageError("text is empty: give the word to write, e.g. text=hello")
-    if text is None and cfg.images is None:
-        raise UsageError("nothing to write: give text=WORD and/or images=PATH")
+    if text is None and cfg.images is None and cfg.trajectories is None:
+        raise UsageError("nothing to write: give text=WORD, images=PATH and/or trajectories=JSON")
     params = params_from_config(cfg)
     if params.method not in ("alg1", "straight"):
         raise UsageError(f"generate.method {params.method!r}: choose alg1 or straight")
@@ -89,6 +121,8 @@ def write(cfg: DictConfig) -> tuple[WordTrajectory, Path]:
     inputs = label_inputs(text) if text is not None else {}
     if cfg.images is not None:
         inputs["image"] = image_inputs(cfg.images)
+    if cfg.trajectories is not None:
+        inputs["traj"] = trajectory_inputs(cfg.trajectories)
     start = time.perf_counter()
     if text is None:
         text = infer_text(model, inputs)
