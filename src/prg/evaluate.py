@@ -18,8 +18,6 @@ from __future__ import annotations
 
 import logging
 import math
-import os
-import shutil
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -31,7 +29,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from prg.cli import hydra_command
 from prg.data.alphabet import ALPHABET, NUM_CLASSES
-from prg.data.build import git_commit, write_json
+from prg.data.build import git_commit, staged_outputs, write_json
 from prg.data.store import load_split
 from prg.errors import UsageError
 from prg.evaluation.classifiers import ensure_classifiers
@@ -141,18 +139,23 @@ def load_models(cfg: DictConfig) -> dict[str, tuple[MultimodalVAE, dict[str, Any
     return models
 
 
-def _test_data(cfg: DictConfig, n: int | None) -> dict[str, torch.Tensor]:
-    """The test split as model inputs; a seeded random subset of ``n`` samples if asked."""
+def _test_data(cfg: DictConfig) -> dict[str, torch.Tensor]:
+    """The whole test split as model inputs."""
     arrays = load_split(Path(cfg.paths.data_dir) / "prepared" / cfg.data.name / "test.npz")
-    total = len(arrays["label"])
-    index = np.arange(total)
-    if n is not None and n < total:
-        index = np.sort(np.random.default_rng(cfg.seed).permutation(total)[:n])
     return {
-        "traj": torch.from_numpy(arrays["traj"][index]).float(),
-        "label": torch.from_numpy(arrays["label"][index].astype(np.int64)),
-        "image": torch.from_numpy(arrays["image"][index]).float().div(255.0).unsqueeze(1),
+        "traj": torch.from_numpy(arrays["traj"]).float(),
+        "label": torch.from_numpy(arrays["label"].astype(np.int64)),
+        "image": torch.from_numpy(arrays["image"]).float().div(255.0).unsqueeze(1),
     }
+
+
+def _subset(data: dict[str, torch.Tensor], n: int | None, seed: int) -> dict[str, torch.Tensor]:
+    """A seeded random subset of ``n`` samples (all when ``n`` is None or too large)."""
+    total = len(data["label"])
+    if n is None or n >= total:
+        return data
+    index = torch.from_numpy(np.sort(np.random.default_rng(seed).permutation(total)[:n]))
+    return {m: v[index] for m, v in data.items()}
 
 
 def _progress(items, desc: str, enabled: bool):
@@ -164,10 +167,10 @@ def _progress(items, desc: str, enabled: bool):
 
 
 # ---- the three parts -------------------------------------------------------------------------
-def likelihood_rows(models, cfg: DictConfig) -> list[dict]:
+def likelihood_rows(models, test: dict[str, torch.Tensor], cfg: DictConfig) -> list[dict]:
     cells, explicit = _requested_cells(cfg)
     lk = cfg.likelihood
-    data = _test_data(cfg, lk.n_test)
+    data = _subset(test, lk.n_test, cfg.seed)
     jobs = []
     for name, (model, _, _) in models.items():
         for cell in cells:
@@ -212,9 +215,11 @@ def likelihood_rows(models, cfg: DictConfig) -> list[dict]:
     return rows
 
 
-def coherence_rows(models, classifiers, cfg: DictConfig) -> tuple[list[dict], dict]:
+def coherence_rows(
+    models, classifiers, test: dict[str, torch.Tensor], cfg: DictConfig
+) -> tuple[list[dict], dict]:
     """Rows per (model, target, subset, kind), and per-class rates for the figures."""
-    data = _test_data(cfg, cfg.n_test)
+    data = _subset(test, cfg.n_test, cfg.seed)
     jobs = [
         (name, model, target, given, kind, float(temperature))
         for name, (model, _, _) in models.items()
@@ -269,12 +274,11 @@ def metrics_of(result: Evaluation) -> dict[str, Any]:
     return metrics
 
 
-def _figures(models, per_class, cfg: DictConfig, folder: Path) -> None:
+def _figures(models, per_class, data: dict[str, torch.Tensor], folder: Path) -> None:
     from prg.data.figures import pyplot
     from prg.figures import image_grid, trajectory_grid
 
     plt = pyplot()
-    data = _test_data(cfg, None)
     first = [
         int(np.flatnonzero(data["label"].numpy() == c)[0])
         for c in range(NUM_CLASSES)
@@ -325,14 +329,10 @@ def _setup_line(cfg: DictConfig, models, part: str) -> str:
     return f"Data: {cfg.data.name} test split; {what}; seed {cfg.seed}. Checkpoints: {ckpts}."
 
 
-def write_reports(result: Evaluation, models, per_class, cfg: DictConfig, parts) -> Path:
-    """Write every report into a staging folder, then move each into ``report_dir``."""
+def write_reports(result: Evaluation, models, per_class, data, cfg: DictConfig, parts) -> Path:
+    """Write every report through a staging folder into ``report_dir``."""
     report_dir = Path(cfg.report_dir)
-    report_dir.mkdir(parents=True, exist_ok=True)
-    staging = report_dir / f".evaluate-{os.getpid()}"
-    shutil.rmtree(staging, ignore_errors=True)
-    staging.mkdir()
-    try:
+    with staged_outputs(report_dir) as staging:
         if "likelihood" in parts:
             (staging / "table1.csv").write_text(to_csv(result.table1, TABLE1_COLUMNS))
             (staging / "table1.md").write_text(
@@ -350,15 +350,8 @@ def write_reports(result: Evaluation, models, per_class, cfg: DictConfig, parts)
             )
             if cfg.figures:
                 (staging / "figures").mkdir()
-                _figures(models, per_class, cfg, staging / "figures")
+                _figures(models, per_class, data, staging / "figures")
         write_json(staging / "metrics.json", result.metrics)
-        for item in staging.iterdir():
-            target = report_dir / item.name
-            if item.is_dir() and target.exists():
-                shutil.rmtree(target)
-            os.replace(item, target)
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
     return report_dir
 
 
@@ -423,17 +416,18 @@ def evaluate(cfg: DictConfig) -> Evaluation:
         ensure_classifiers(data_dir, classifier_dir, classifier_cfg, progress=cfg.progress)
         return result
     models = load_models(cfg)
+    test = _test_data(cfg)
     if "likelihood" in parts:
-        result.table1 = likelihood_rows(models, cfg)
+        result.table1 = likelihood_rows(models, test, cfg)
     per_class = {}
     if "coherence" in parts:
         classifiers = ensure_classifiers(
             data_dir, classifier_dir, classifier_cfg, progress=cfg.progress
         )
         result.classifiers = _classifier_meta(classifier_dir)
-        result.coherence, per_class = coherence_rows(models, classifiers, cfg)
+        result.coherence, per_class = coherence_rows(models, classifiers, test, cfg)
     result.metrics = metrics_of(result)
-    result.report_dir = write_reports(result, models, per_class, cfg, parts)
+    result.report_dir = write_reports(result, models, per_class, test, cfg, parts)
     log_to_mlflow(result, models, cfg)
     log.info("reports in %s", result.report_dir)
     for name, (model, _, _) in models.items():

@@ -25,7 +25,6 @@ import json
 import logging
 import math
 import os
-import shutil
 import time
 from pathlib import Path
 from typing import Any
@@ -35,6 +34,7 @@ import torch
 from omegaconf import DictConfig, OmegaConf
 
 from prg.cli import hydra_command
+from prg.data.build import staged_outputs
 from prg.errors import UsageError
 from prg.models.checkpoint import load_model
 from prg.pipeline.connect import ConnectionParams
@@ -148,11 +148,7 @@ def write(cfg: DictConfig) -> tuple[WordTrajectory, Path]:
 
 
 def _save(word: WordTrajectory, path: np.ndarray, out_dir: Path) -> None:
-    out_dir.parent.mkdir(parents=True, exist_ok=True)
-    staging = out_dir.parent / f".{out_dir.name}.tmp-{os.getpid()}"
-    shutil.rmtree(staging, ignore_errors=True)
-    staging.mkdir()
-    try:
+    with staged_outputs(out_dir) as staging:
         word.to_json(staging / "word.json")
         word.to_png(staging / "word.png")
         word.to_svg(staging / "word.svg")
@@ -165,11 +161,6 @@ def _save(word: WordTrajectory, path: np.ndarray, out_dir: Path) -> None:
             comments="",
             fmt="%.6f",
         )
-        out_dir.mkdir(exist_ok=True)
-        for item in staging.iterdir():
-            os.replace(item, out_dir / item.name)
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
 
 
 def _log_run(cfg, word, out_dir: Path, family: str, ckpt: str, seconds: float) -> None:

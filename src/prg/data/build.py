@@ -13,7 +13,8 @@ import os
 import shutil
 import subprocess
 import time
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -343,6 +344,28 @@ def dataset_metrics(manifest: dict[str, Any]) -> dict[str, Any]:
         if key in aug:
             out[f"augment_{key}"] = aug[key]
     return out
+
+
+@contextmanager
+def staged_outputs(target: str | os.PathLike) -> Iterator[Path]:
+    """Write a command's outputs into a hidden folder beside ``target``; on success move each
+    entry into ``target`` (created then; a folder entry replaces the old one), on failure leave
+    ``target`` untouched. Nothing half-written is ever visible in ``target``."""
+    target = Path(target)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    staging = target.parent / f".{target.name}.tmp-{os.getpid()}"
+    shutil.rmtree(staging, ignore_errors=True)
+    staging.mkdir()
+    try:
+        yield staging
+        target.mkdir(exist_ok=True)
+        for item in staging.iterdir():
+            destination = target / item.name
+            if item.is_dir() and destination.exists():
+                shutil.rmtree(destination)
+            os.replace(item, destination)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
 
 
 def write_json(path: str | os.PathLike, obj: Any) -> None:

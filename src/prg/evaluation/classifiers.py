@@ -32,6 +32,7 @@ from torch import nn
 from tqdm.auto import tqdm
 
 from prg.data.alphabet import ALPHABET, NUM_CLASSES
+from prg.data.build import write_json
 from prg.data.store import load_split
 from prg.errors import UsageError
 
@@ -365,15 +366,6 @@ def load_classifier(path: str | os.PathLike) -> tuple[nn.Module, dict[str, Any]]
     return model, {**payload["meta"], "modality": payload["modality"]}
 
 
-def _write_json(path: Path, obj: Any) -> None:
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        tmp.write_text(json.dumps(obj, indent=2, sort_keys=True) + "\n")
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-
-
 # -- one classifier per dataset ---------------------------------------------------------------
 
 
@@ -515,5 +507,5 @@ def ensure_classifiers(
     # `classifiers` stage) must not touch another stage's output
     if trained or not (out_dir / "metrics.json").is_file():
         out_dir.mkdir(parents=True, exist_ok=True)
-        _write_json(out_dir / "metrics.json", {**metrics, "data_fingerprint": fingerprint})
+        write_json(out_dir / "metrics.json", {**metrics, "data_fingerprint": fingerprint})
     return models
