@@ -12,6 +12,7 @@ from prg.models.cvae import CVAE
 from prg.models.muse import MUSE
 from prg.pipeline.generate import (
     GenerateParams,
+    clean_text,
     decode_letters,
     infer_text,
     label_inputs,
@@ -102,3 +103,21 @@ def test_text_is_read_from_images_by_a_family_that_generates_labels():
     assert len(text) == 3 and text.isalnum()
     with pytest.raises(UsageError, match="avae_ti cannot read letters"):
         infer_text(AVAE(("traj", "image")).eval(), images)
+
+
+@pytest.mark.parametrize(
+    "text, on_unknown, expected",
+    [
+        ("  hello   world ", "error", "hello world"),
+        ("ça va?", "skip", "a va"),
+        ("A1 b2", "skip", "A1 b2"),
+        ("--- x", "skip", "x"),
+    ],
+)
+def test_clean_text_normalises_spaces_and_skips_on_request(text, on_unknown, expected):
+    assert clean_text(text, on_unknown) == expected
+
+
+def test_clean_text_lists_every_unknown_character():
+    with pytest.raises(UsageError, match=r"'ç', '\?'"):
+        clean_text("ça va?")

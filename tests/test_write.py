@@ -133,6 +133,8 @@ BAD = [
     (["text=abcd", "images={tmp}"], "holds no"),
     (["trajectories={tmp}/none.json"], "does not exist"),
     (["text=h@llo"], "unsupported characters '@'"),
+    (["text='@!'", "on_unknown=skip"], "no letters to write"),
+    (["text=hi", "on_unknown=ignore"], "error or skip"),
     (["text=hi", "ckpt={tmp}/none.ckpt"], "does not exist"),
     (["text=hi", "generate.method=zigzag"], "alg1 or straight"),
     (["text=hi", "generate.speed_cm_s=-1"], "speed"),
@@ -151,3 +153,18 @@ def test_bad_input_gets_one_line_and_exit_2(tmp_path, checkpoint, args, expected
     assert len(lines) == 1 and lines[0].startswith("prg-write: error:"), lines
     assert expected in lines[0]
     assert not out.exists()
+
+
+def test_unknown_characters_are_skipped_on_request(tmp_path, checkpoint):
+    out = tmp_path / "out"
+    result = run_cli(
+        "prg-write",
+        'text="héllo, wörld!"',
+        "on_unknown=skip",
+        f"ckpt={checkpoint}",
+        f"out_dir={out}",
+        f"paths.root_dir={tmp_path}",
+        "mlflow=false",
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert WordTrajectory.from_json(out / "word.json").text == "hllo wrld"

@@ -52,7 +52,10 @@ def _preflight(command: str, config_name: str, argv: list[str]) -> None:
     except Exception as err:  # Hydra raises several types; all mean a bad override
         message = " ".join(str(err).split())
         cut = message.find("Set the environment variable HYDRA_FULL_ERROR")
-        fail(command, (message[:cut] if cut > 0 else message).strip(), 2)
+        message = (message[:cut] if cut > 0 else message).strip()
+        if "LexerNoViableAlt" in message or "mismatched input" in message:
+            message += " (a value with spaces, commas or symbols needs Hydra quotes: 'key=\"...\"')"
+        fail(command, message, 2)
 
 
 def hydra_command(task: Callable[[Any], Any], config_name: str, command: str) -> Callable[[], None]:

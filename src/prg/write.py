@@ -38,7 +38,13 @@ from prg.data.build import staged_outputs
 from prg.errors import UsageError
 from prg.models.checkpoint import load_model
 from prg.pipeline.connect import ConnectionParams
-from prg.pipeline.generate import GenerateParams, infer_text, label_inputs, write_word
+from prg.pipeline.generate import (
+    GenerateParams,
+    clean_text,
+    infer_text,
+    label_inputs,
+    write_word,
+)
 from prg.pipeline.layout import LayoutParams
 from prg.pipeline.perceive import (
     load_image,
@@ -111,6 +117,8 @@ def write(cfg: DictConfig) -> tuple[WordTrajectory, Path]:
     text = None if cfg.text is None else str(cfg.text).strip()
     if cfg.text is not None and not text:
         raise UsageError("text is empty: give the word to write, e.g. text=hello")
+    if text is not None:
+        text = clean_text(text, cfg.on_unknown)
     if text is None and cfg.images is None and cfg.trajectories is None:
         raise UsageError("nothing to write: give text=WORD, images=PATH and/or trajectories=JSON")
     params = params_from_config(cfg)

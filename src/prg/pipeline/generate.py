@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import torch
 
-from prg.data.alphabet import label_to_char, text_to_labels
+from prg.data.alphabet import label_to_char, text_to_labels, unsupported_chars
 from prg.errors import UsageError
 from prg.models.base import MODALITIES, MultimodalVAE
 from prg.pipeline.connect import ConnectionParams, connect_sequence
@@ -223,6 +223,37 @@ def write_word(
     word.dmp = dmp.to_dict()
     word.duration_s = duration
     return word, rollout(dmp)
+
+
+def clean_text(text: str, on_unknown: str = "error") -> str:
+    """``text`` ready to write: words separated by single spaces, unsupported characters handled.
+
+    Parameters
+    ----------
+    text : str
+    on_unknown : {"error", "skip"}
+        ``"error"``: one error listing every character outside 0-9, A-Z, a-z (spaces aside);
+        ``"skip"``: drop them (logged) and write the rest.
+
+    Raises
+    ------
+    UsageError
+        For an unsupported character with ``on_unknown="error"``, an unknown ``on_unknown``, or
+        nothing left to write.
+    """
+    if on_unknown not in ("error", "skip"):
+        raise UsageError(f"on_unknown {on_unknown!r}: choose error or skip")
+    words = text.split()
+    unknown = unsupported_chars("".join(words))
+    if unknown and on_unknown == "error":
+        text_to_labels("".join(words))  # raises, listing them
+    if unknown:
+        log.warning("skipping unsupported characters %s", ", ".join(map(repr, unknown)))
+        words = ["".join(c for c in w if c not in unknown) for w in words]
+    cleaned = " ".join(w for w in words if w)
+    if not cleaned:
+        raise UsageError(f"text {text!r} has no letters to write: accepted are 0-9, A-Z and a-z")
+    return cleaned
 
 
 def label_inputs(text: str) -> dict[str, torch.Tensor]:
