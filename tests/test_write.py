@@ -4,6 +4,7 @@ import csv
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 import torch
 from mlflow import MlflowClient
@@ -11,6 +12,7 @@ from mlflow import MlflowClient
 from prg.cli import compose_config
 from prg.models.module import PRGModule
 from prg.pipeline.word import WordTrajectory
+from prg.recording import read_entities, read_times
 from prg.tracking import sqlite_uri
 from tests.conftest import run_cli
 
@@ -45,8 +47,15 @@ def test_writes_the_word_its_renderings_rollout_and_an_mlflow_run(tmp_path, chec
         "word.png",
         "word.svg",
         "dmp_rollout.csv",
+        "word.rrd",
     }
     word = WordTrajectory.from_json(out / "word.json")
+    entities = read_entities(out / "word.rrd")
+    assert {f"word/letters/{i}_{c}" for i, c in enumerate("abcd")} <= set(entities)
+    assert {"word/connections/0", "word/connections/1", "word/rollout/pen"} <= set(entities)
+    assert len(read_times(out / "word.rrd", "word/rollout/pen", "time")) == len(
+        np.loadtxt(out / "dmp_rollout.csv", delimiter=",", skiprows=1)
+    )
     assert word.text == "ab cd" and [c for c, _ in word.letters] == list("abcd")
     assert json.loads((out / "word.json").read_text())["dmp"]["n_basis"] >= 20
     with open(out / "dmp_rollout.csv") as f:

@@ -40,10 +40,12 @@ from prg.models.checkpoint import load_model
 from prg.pipeline.connect import ConnectionParams
 from prg.pipeline.generate import (
     GenerateParams,
+    check_inputs,
     clean_text,
+    compose_word,
+    decode_letters,
     infer_text,
     label_inputs,
-    write_word,
 )
 from prg.pipeline.layout import LayoutParams
 from prg.pipeline.perceive import (
@@ -53,6 +55,7 @@ from prg.pipeline.perceive import (
     segment_word_image,
 )
 from prg.pipeline.word import WordTrajectory
+from prg.recording import record_write
 
 log = logging.getLogger(__name__)
 
@@ -135,10 +138,15 @@ def write(cfg: DictConfig) -> tuple[WordTrajectory, Path]:
     if text is None:
         text = infer_text(model, inputs)
         log.info("read %r from the images", text)
-    word, path = write_word(model, text, inputs, params)
+    check_inputs(text, inputs)
+    letters = decode_letters(model, inputs, params.temperature, params.seed)
+    word, path = compose_word(letters, text, params)
     seconds = time.perf_counter() - start
     out_dir = Path(cfg.out_dir)
-    _save(word, path, out_dir)
+    recording = None
+    if cfg.record:
+        recording = {"letters": letters, "images": inputs.get("image")}
+    _save(word, path, out_dir, recording)
     log.info(
         "wrote %r with %s in %.0f ms: %d points, %.1f cm, %.1f s, DMP %d bases -> %s",
         text,
@@ -155,8 +163,15 @@ def write(cfg: DictConfig) -> tuple[WordTrajectory, Path]:
     return word, out_dir
 
 
-def _save(word: WordTrajectory, path: np.ndarray, out_dir: Path) -> None:
+def _save(
+    word: WordTrajectory, path: np.ndarray, out_dir: Path, recording: dict | None = None
+) -> None:
     with staged_outputs(out_dir) as staging:
+        if recording is not None:
+            images = recording.pop("images")
+            if images is not None:
+                images = images.numpy()
+            record_write(staging / "word.rrd", word, path, images=images, **recording)
         word.to_json(staging / "word.json")
         word.to_png(staging / "word.png")
         word.to_svg(staging / "word.svg")

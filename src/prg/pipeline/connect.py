@@ -355,17 +355,18 @@ def connect_letters(
         turn = np.clip(wanted, -alpha_max, alpha_max)
         # a target inside the turning circle on its side would be orbited: go straight on
         side = np.sign(wanted) * half_pi
-        centre = pen + radius * np.column_stack(
-            [np.cos(heading + turn / 2 + side), np.sin(heading + turn / 2 + side)]
-        )
+        arc = heading + turn / 2 + side
+        centre_x = pen[0] + radius * np.cos(arc)
+        centre_y = pen[1] + radius * np.sin(arc)
         orbit = (np.abs(wanted) > alpha_max) & (
-            np.hypot(targets[:, 0] - centre[:, 0], targets[:, 1] - centre[:, 1]) < radius
+            np.hypot(targets[:, 0] - centre_x, targets[:, 1] - centre_y) < radius
         )
         turn = np.where(orbit, 0.0, turn)
         angles = heading + turn
-        cand = pen + delta * np.column_stack([np.cos(angles), np.sin(angles)])  # (m, 2)
-        dist_first = np.hypot(cand[:, 0] - first[0], cand[:, 1] - first[1])
-        dist_own = np.hypot(cand[:, 0] - targets[:, 0], cand[:, 1] - targets[:, 1])
+        cand_x = pen[0] + delta * np.cos(angles)  # (m,)
+        cand_y = pen[1] + delta * np.sin(angles)
+        dist_first = np.hypot(cand_x - first[0], cand_y - first[1])
+        dist_own = np.hypot(cand_x - targets[:, 0], cand_y - targets[:, 1])
         cost = (
             index_term[: targets.shape[0]]
             + theta_a * _minmax(np.abs(turn))
@@ -373,7 +374,7 @@ def connect_letters(
             + theta_p * _minmax(dist_own)
         )
         j = int(np.argmin(cost))
-        pen, heading = cand[j], float(angles[j])
+        pen, heading = np.array([cand_x[j], cand_y[j]]), float(angles[j])
         path.append(pen)
         if dist_first[j] <= delta:
             joined = 0

@@ -116,7 +116,7 @@ BASIS_PER_100_POINTS = 20.0
 """Default basis functions per 100 points of :func:`basis_count`."""
 BASIS_MINIMUM = 20
 """Default lower bound of :func:`basis_count`."""
-BASIS_MAXIMUM = 500
+BASIS_MAXIMUM = 2000
 """Default upper bound of :func:`basis_count`."""
 SAMPLES_PER_BASIS = 4
 """Least number of integration samples per basis function in :func:`rollout`."""
@@ -343,7 +343,7 @@ def basis_count(
 
     ``round(n_points * per_100_points / 100)`` clipped to ``[minimum, maximum]``. A word's point
     count grows with its length (about 100 points a letter), and so does the detail the forcing
-    term must carry. The defaults (20 per 100 points, at least 20, at most 500) give 200 basis
+    term must carry. The defaults (20 per 100 points, at least 20, at most 2000) give 200 basis
     functions for a 1000-point word; a 1000-point curve of twelve loops then reproduces to about
     1e-4 mm, and 100 (about eight per loop) still to about 2e-4 mm, while 75 leave 0.03 mm and 50
     leave 1.4 mm: the defaults keep a margin of about two for words with denser strokes.

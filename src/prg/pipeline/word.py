@@ -403,6 +403,7 @@ def _atomic_write(path: Path, write: Callable[[Path], object]) -> Path:
     os.close(fd)
     tmp = Path(name)
     try:
+        os.chmod(tmp, 0o644)  # mkstemp's 0600 would make the outputs private to the writer
         write(tmp)
         os.replace(tmp, path)
     except BaseException:

@@ -1,0 +1,236 @@
+"""Benchmark writing a word: label input -> letters -> layout -> connections -> one DMP rollout.
+
+For words of 1-12 letters (``--reps`` random lowercase words per length, seeded), the whole
+``prg.pipeline.generate.write_word`` path is timed (decode every letter, final processing map,
+Algorithm 1 connection strokes, rest-to-rest timing, DMP fit and rollout), side by side in the
+same run with two references:
+
+- ``decode``: the model's generation map alone for the same letters (one batched
+  ``model.generate`` under ``torch.no_grad``: the plain PyTorch floor) — ratio total / decode
+  says what the rest of the pipeline costs;
+- ``straight``: the same pipeline with the paper's straight-line joiner instead of Algorithm 1
+  — ratio alg1 / straight is the price of the connection algorithm.
+
+It also reports the DMP's reproduction error (RMSE and max, mm, rollout against the timed
+demonstration) with the default settings (``conf/write.yaml``: 50 basis functions per 100
+samples at 100 samples/s). Target: median under 50 ms for 6 letters; RMSE under 0.1 mm.
+
+With ``--speech``, speech input end to end (espeak-ng audio -> recogniser -> text -> word) per
+recogniser backend available here, on the paper's words.
+
+Models: ``models/<family>/model.ckpt`` (``make demo``) when present, else the family built from
+``conf/model`` with seeded random weights (speed does not depend on the weights; RMSE does).
+
+Usage: ``python benchmarks/bench_write.py [--families muse avae_ts] [--reps 7] [--speech]``
+Prints a table and writes ``benchmarks/results/bench_write.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import random
+import statistics
+import string
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+from omegaconf import OmegaConf
+
+from prg.cli import compose_config
+from prg.models.checkpoint import load_model
+from prg.pipeline.generate import (
+    GenerateParams,
+    label_inputs,
+    rest_to_rest_samples,
+    usable_inputs,
+    write_word,
+)
+
+RESULTS = Path(__file__).parent / "results"
+ROOT = Path(__file__).parent.parent
+TARGET_MS = 50.0
+TARGET_RMSE_MM = 0.1
+PAPER_WORDS = ("bell", "cat", "jump")
+
+
+def family_model(family: str):
+    """The demo model of ``family``, or seeded random weights; and where it came from."""
+    ckpt = ROOT / "models" / family / "model.ckpt"
+    if ckpt.exists():
+        return load_model(ckpt)[0], str(ckpt.relative_to(ROOT))
+    from hydra.utils import instantiate
+
+    torch.manual_seed(0)
+    cfg = compose_config("train", [f"model={family}"]).model.module
+    return instantiate(OmegaConf.to_container(cfg, resolve=True)), "random weights (no demo model)"
+
+
+def words_of(length: int, reps: int, rng: random.Random) -> list[str]:
+    return ["".join(rng.choice(string.ascii_lowercase) for _ in range(length)) for _ in range(reps)]
+
+
+def time_word(model, text: str, params: GenerateParams) -> dict:
+    inputs = label_inputs(text)
+    start = time.perf_counter()
+    with torch.no_grad():
+        model.generate(usable_inputs(model, inputs), "traj", n=1)
+    decode = time.perf_counter() - start
+    start = time.perf_counter()
+    word, path = write_word(model, text, inputs, params)
+    total = time.perf_counter() - start
+    straight = GenerateParams(**{**params.__dict__, "method": "straight"})
+    start = time.perf_counter()
+    write_word(model, text, inputs, straight)
+    total_straight = time.perf_counter() - start
+    samples, _ = rest_to_rest_samples(
+        word.points, params.speed_cm_s, params.ramp_s, params.samples_per_s
+    )
+    error = np.linalg.norm(path - samples, axis=1) * 10  # mm
+    return {
+        "decode_ms": decode * 1000,
+        "total_ms": total * 1000,
+        "straight_ms": total_straight * 1000,
+        "rmse_mm": float(np.sqrt(np.mean(error**2))),
+        "max_mm": float(error.max()),
+        "points": len(samples),
+        "basis": word.dmp["n_basis"],
+        "width_cm": float(np.ptp(word.points[:, 0])),
+    }
+
+
+def speech_rows(model, family: str, params: GenerateParams, reps: int) -> list[dict]:
+    """Speech end to end per backend: espeak-ng audio -> recogniser -> word -> DMP rollout."""
+    from prg.pipeline import speech
+
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        audio = {}
+        for word in PAPER_WORDS:
+            wav = Path(tmp) / f"{word}.wav"
+            subprocess.run(["espeak-ng", "-w", str(wav), word], check=True)
+            audio[word] = wav
+        for backend in speech.available_backends():
+            settings = speech.SpeechParams(backend=backend, lexicon=PAPER_WORDS)
+            speech.perceive_speech(audio["cat"], settings)  # load the recogniser once
+            for word, wav in audio.items():
+                times, recognise_times, heard = [], [], None
+                for _ in range(reps):
+                    start = time.perf_counter()
+                    heard, _ = speech.perceive_speech(wav, settings)
+                    middle = time.perf_counter()
+                    write_word(model, heard, label_inputs(heard), params)
+                    times.append(time.perf_counter() - start)
+                    recognise_times.append(middle - start)
+                rows.append(
+                    {
+                        "family": family,
+                        "backend": backend,
+                        "word": word,
+                        "heard": heard,
+                        "recognise_ms": 1000 * statistics.median(recognise_times),
+                        "total_ms": 1000 * statistics.median(times),
+                    }
+                )
+                print(f"speech {backend} {word!r} -> {heard!r}: {rows[-1]['total_ms']:.0f} ms")
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--families", nargs="+", default=["muse", "avae_ts"])
+    parser.add_argument("--lengths", nargs="+", type=int, default=[1, 2, 4, 6, 8, 10, 12])
+    parser.add_argument("--reps", type=int, default=7, help="words per length")
+    parser.add_argument("--threads", type=int, default=1, help="torch threads")
+    parser.add_argument("--speech", action="store_true", help="also time speech input")
+    args = parser.parse_args()
+    torch.set_num_threads(args.threads)
+    params = GenerateParams()
+
+    rows, speech, sources = [], [], {}
+    for family in args.families:
+        model, sources[family] = family_model(family)
+        time_word(model, "warm", params)
+        rng = random.Random(0)
+        for length in args.lengths:
+            runs = [time_word(model, w, params) for w in words_of(length, args.reps, rng)]
+            row = {"family": family, "letters": length}
+            for key in runs[0]:
+                row[key] = statistics.median(r[key] for r in runs)
+            row["max_rmse_mm"] = max(r["rmse_mm"] for r in runs)
+            row["max_mm"] = max(r["max_mm"] for r in runs)
+            rows.append(row)
+            print(
+                f"{family} {length} letters: {row['total_ms']:.1f} ms "
+                f"(decode {row['decode_ms']:.1f}), RMSE {row['rmse_mm']:.3f} mm",
+                flush=True,
+            )
+        if args.speech:
+            speech += speech_rows(model, family, params, max(3, args.reps // 2))
+
+    print(
+        f"\nWrite latency, label input -> DMP rollout, median of {args.reps} random words per "
+        f"length, {args.threads} torch thread(s); RMSE of the DMP rollout against its "
+        f"demonstration (median / worst of the words)"
+    )
+    header = (
+        f"{'family':>8}{'letters':>8} | {'alg1':>8}{'decode':>8}{'ratio':>7} | "
+        f"{'straight':>9}{'ratio':>7} | {'RMSE mm':>8}{'worst':>7}{'max mm':>8} | {'basis':>6}"
+    )
+    print(header)
+    print("-" * len(header))
+    for r in rows:
+        flag = ""
+        if (r["letters"] == 6 and r["total_ms"] > TARGET_MS) or r["max_rmse_mm"] > TARGET_RMSE_MM:
+            flag = "  < target"
+        print(
+            f"{r['family']:>8}{r['letters']:>8} | {r['total_ms']:>6.1f}ms{r['decode_ms']:>6.1f}ms"
+            f"{r['total_ms'] / r['decode_ms']:>7.1f} | {r['straight_ms']:>7.1f}ms"
+            f"{r['total_ms'] / r['straight_ms']:>7.2f} | {r['rmse_mm']:>8.3f}"
+            f"{r['max_rmse_mm']:>7.3f}{r['max_mm']:>8.3f} | {r['basis']:>6.0f}{flag}"
+        )
+    if speech:
+        print("\nSpeech input end to end (espeak-ng default voice; lexicon = the paper's words)")
+        header = f"{'family':>8} {'backend':>12} {'word':>6} {'heard':>8} | {'recognise':>10}{'total':>9}"
+        print(header)
+        print("-" * len(header))
+        for r in speech:
+            print(
+                f"{r['family']:>8} {r['backend']:>12} {r['word']:>6} {r['heard']!s:>8} | "
+                f"{r['recognise_ms']:>8.0f}ms{r['total_ms']:>7.0f}ms"
+            )
+    report = {
+        "machine": {
+            "cpus": os.cpu_count(),
+            "python": platform.python_version(),
+            "torch": torch.__version__,
+            "processor": platform.processor() or platform.machine(),
+            "load_avg_at_end": [round(x, 2) for x in os.getloadavg()],
+        },
+        "settings": {
+            "reps": args.reps,
+            "threads": args.threads,
+            "generate": {k: str(v) for k, v in params.__dict__.items()},
+            "models": sources,
+            "target_ms_6_letters": TARGET_MS,
+            "target_rmse_mm": TARGET_RMSE_MM,
+        },
+        "rows": rows,
+        "speech": speech,
+    }
+    RESULTS.mkdir(exist_ok=True)
+    out = RESULTS / "bench_write.json"
+    tmp = out.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(report, indent=2) + "\n")
+    tmp.replace(out)
+    print(f"\nwrote {out}")
+
+
+if __name__ == "__main__":
+    main()
