@@ -3,12 +3,15 @@ SHELL := /bin/bash
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
-EXTRAS ?= dev,sweep
+EXTRAS ?= dev,sweep,speech
+# Debian packages: espeak-ng speaks the test and demo words, sox converts their audio
+SYSTEM_PACKAGES ?= espeak-ng sox
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 STAMP := $(VENV)/.setup-$(shell cat pyproject.toml | sha1sum | cut -c1-12)
 export PATH := $(CURDIR)/$(BIN):$(PATH)
 
 .DEFAULT_GOAL := help
-.PHONY: help setup demo test test-all lint format bench clean
+.PHONY: help system setup demo test test-all lint format bench clean
 
 help: ## Show this help
 	@awk 'BEGIN {FS = ":.*## "} /^[a-zA-Z_-]+:.*## / {printf "  \033[36m%-10s\033[0m %s\n", $$1, $$2}' $(MAKEFILE_LIST)
@@ -24,14 +27,23 @@ $(STAMP): pyproject.toml | $(BIN)/python
 	@rm -f $(VENV)/.setup-*
 	@touch $@
 
-setup: $(STAMP) ## Create .venv and install torch (CPU) and the project with its extras (idempotent)
+system: ## Install the Debian packages the tests and the demo use, if missing (root or sudo)
+	@missing=""; for p in $(SYSTEM_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	if [ -n "$$missing" ]; then \
+		echo "installing Debian packages:$$missing"; \
+		$(SUDO) apt-get update -qq && \
+		DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing; \
+	fi
 
-demo: setup ## Run the whole pipeline (dvc repro): dataset, four models (quick profile), evaluation
+setup: system $(STAMP) ## Create .venv, install system packages, torch (CPU) and the project (idempotent)
+
+demo: setup ## Run the whole pipeline (dvc repro): dataset, four models, evaluation, Table II
 	dvc repro
 	@echo
 	@echo "Dataset:  data/prepared/synthetic/ (train/val/test.npz, manifest.json, figures/)"
 	@echo "Models:   models/<family>/model.ckpt and metrics.json  (dvc metrics show)"
 	@echo "Reports:  reports/table1.md, reports/coherence.md, reports/robustness.md, reports/figures/"
+	@echo "Words:    reports/dictaphone/table2.png, table2.md; <word>/<sound|image>/word.rrd (rerun FILE)"
 	@echo "Runs:     mlflow ui --backend-store-uri sqlite:///mlruns.db   (then http://127.0.0.1:5000)"
 
 test: setup ## Run the default test suite (fast; no `slow` tests)
@@ -52,6 +64,9 @@ bench: setup ## Run the benchmarks (tables printed, JSON under benchmarks/result
 	$(BIN)/python benchmarks/bench_prepare.py
 	$(BIN)/python benchmarks/bench_train.py
 	$(BIN)/python benchmarks/bench_evaluate.py
+	$(BIN)/python benchmarks/bench_dmp.py
+	$(BIN)/python benchmarks/bench_write.py --speech
+	$(BIN)/python benchmarks/bench_speech.py
 
 clean: ## Remove caches (keeps .venv, data and runs)
 	rm -rf .pytest_cache .ruff_cache .hypothesis

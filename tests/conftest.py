@@ -32,6 +32,25 @@ def small_data_cfg(**overrides) -> dict:
 
 
 @pytest.fixture(scope="session")
+def untrained_muse_checkpoint(tmp_path_factory) -> Path:
+    """An untrained MUSE saved the way training saves it (plumbing, not handwriting quality)."""
+    import torch
+    from omegaconf import OmegaConf
+
+    from prg.cli import compose_config
+    from prg.models.module import PRGModule
+
+    node = OmegaConf.to_container(
+        compose_config("train", ["model=muse"]).model.module, resolve=True
+    )
+    torch.manual_seed(0)
+    module = PRGModule(model=node["model"], optimizer=node["optimizer"])
+    path = tmp_path_factory.mktemp("ckpt") / "muse.ckpt"
+    torch.save({"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams)}, path)
+    return path
+
+
+@pytest.fixture(scope="session")
 def small_dataset(tmp_path_factory) -> Path:
     """A prepared synthetic dataset (5 writers, 3 augmented samples per class); returns data_dir."""
     from prg.data.build import build_dataset

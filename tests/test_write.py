@@ -2,15 +2,14 @@
 
 import csv
 import json
+import subprocess
+import wave
 from pathlib import Path
 
 import numpy as np
 import pytest
-import torch
 from mlflow import MlflowClient
 
-from prg.cli import compose_config
-from prg.models.module import PRGModule
 from prg.pipeline.word import WordTrajectory
 from prg.recording import read_entities, read_times
 from prg.tracking import sqlite_uri
@@ -18,18 +17,8 @@ from tests.conftest import run_cli
 
 
 @pytest.fixture(scope="module")
-def checkpoint(tmp_path_factory) -> Path:
-    """An untrained MUSE saved the way training saves it (plumbing, not handwriting quality)."""
-    from omegaconf import OmegaConf
-
-    node = OmegaConf.to_container(
-        compose_config("train", ["model=muse"]).model.module, resolve=True
-    )
-    torch.manual_seed(0)
-    module = PRGModule(model=node["model"], optimizer=node["optimizer"])
-    path = tmp_path_factory.mktemp("ckpt") / "muse.ckpt"
-    torch.save({"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams)}, path)
-    return path
+def checkpoint(untrained_muse_checkpoint) -> Path:
+    return untrained_muse_checkpoint
 
 
 def test_writes_the_word_its_renderings_rollout_and_an_mlflow_run(tmp_path, checkpoint):
@@ -135,6 +124,28 @@ def test_trajectories_channel(tmp_path, checkpoint, small_dataset):
     assert WordTrajectory.from_json(out / "word.json").text == "ab"
 
 
+def test_audio_channel_speech_to_word_with_recording(tmp_path, checkpoint):
+    wav = tmp_path / "jump.wav"
+    subprocess.run(["espeak-ng", "-v", "en+f3", "-s", "130", "-w", str(wav), "jump"], check=True)
+    out = tmp_path / "out"
+    result = run_cli(
+        "prg-write",
+        f"audio={wav}",
+        "speech.lexicon=[bell,cat,jump]",
+        f"ckpt={checkpoint}",
+        f"out_dir={out}",
+        f"paths.root_dir={tmp_path}",
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert WordTrajectory.from_json(out / "word.json").text == "jump"
+    entities = read_entities(out / "word.rrd")
+    assert {"inputs/audio", "inputs/waveform", "inputs/transcript"} <= set(entities)
+    client = MlflowClient(sqlite_uri(tmp_path / "mlruns.db"))
+    (run,) = client.search_runs([client.get_experiment_by_name("prg").experiment_id])
+    assert run.data.params["speech.word"] == "jump" and run.data.params["audio"] == str(wav)
+    assert run.data.metrics["write/recognise_ms"] > 0
+
+
 BAD = [
     (["text= "], "text is empty"),
     (["mlflow=false"], "nothing to write"),
@@ -147,12 +158,21 @@ BAD = [
     (["text=hi", "ckpt={tmp}/none.ckpt"], "does not exist"),
     (["text=hi", "generate.method=zigzag"], "alg1 or straight"),
     (["text=hi", "generate.speed_cm_s=-1"], "speed"),
+    (["text=hi", "audio={tmp}/silence.wav"], "give one of them"),
+    (["audio={tmp}/none.wav"], "none.wav"),
+    (["audio={tmp}/silence.wav"], "silent"),
+    (["audio={tmp}/silence.wav", "speech.backend=kaldi"], "speech backend 'kaldi' is unknown"),
+    (["audio={tmp}/silence.wav", "speech.lexicon={tmp}/none.txt"], "not a readable word list"),
 ]
 
 
 @pytest.mark.parametrize("args, expected", BAD, ids=[" ".join(a) for a, _ in BAD])
 def test_bad_input_gets_one_line_and_exit_2(tmp_path, checkpoint, args, expected):
     out = tmp_path / "out"
+    silence = np.zeros(16000, dtype=np.int16)
+    with wave.open(str(tmp_path / "silence.wav"), "wb") as f:
+        f.setnchannels(1), f.setsampwidth(2), f.setframerate(16000)
+        f.writeframes(silence.tobytes())
     args = [a.format(tmp=tmp_path) for a in args]
     if not any(a.startswith("ckpt=") for a in args):
         args.append(f"ckpt={checkpoint}")

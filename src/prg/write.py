@@ -54,6 +54,7 @@ from prg.pipeline.perceive import (
     perceive_trajectories,
     segment_word_image,
 )
+from prg.pipeline.speech import SAMPLE_RATE, SpeechParams
 from prg.pipeline.word import WordTrajectory
 from prg.recording import record_write
 
@@ -115,16 +116,56 @@ def trajectory_inputs(path: str | os.PathLike) -> torch.Tensor:
     return torch.from_numpy(perceive_trajectories(arrays, y_down=y_down))
 
 
+def speech_params_from_config(cfg: DictConfig) -> SpeechParams:
+    """The ``speech`` settings as :class:`SpeechParams`; ``lexicon`` may name a text file of
+    words (one per line)."""
+    settings = OmegaConf.to_container(cfg.speech, resolve=True)
+    lexicon = settings.get("lexicon")
+    if isinstance(lexicon, str):
+        path = Path(lexicon)
+        try:
+            settings["lexicon"] = [w for w in path.read_text().splitlines() if w.strip()]
+        except OSError as err:
+            raise UsageError(
+                f"speech.lexicon {path}: not a readable word list ({err.strerror}); give a "
+                "text file with one word per line, or a list: speech.lexicon=[bell,cat]"
+            ) from None
+    try:
+        return SpeechParams(**settings)
+    except TypeError as err:
+        raise UsageError(f"speech settings: {err}") from None
+
+
+def speech_input(audio: str | os.PathLike, settings: SpeechParams) -> dict[str, Any]:
+    """phi_S on a sound file: its 16 kHz samples (for the recording) and the transcript."""
+    from prg.pipeline.speech import load_audio, perceive_speech
+
+    samples = load_audio(audio)
+    _, transcript = perceive_speech(audio, settings)
+    log.info("heard %r (%s) in %.2f s", transcript.word, transcript.backend, transcript.seconds)
+    return {"samples": samples, "transcript": transcript}
+
+
 def write(cfg: DictConfig) -> tuple[WordTrajectory, Path]:
     """Task: generate the word and save it, its renderings and its DMP rollout."""
     text = None if cfg.text is None else str(cfg.text).strip()
     if cfg.text is not None and not text:
         raise UsageError("text is empty: give the word to write, e.g. text=hello")
+    if text is not None and cfg.audio is not None:
+        raise UsageError(
+            "text and audio both give the S channel (the word's letters): give one of them"
+        )
     if text is not None:
         text = clean_text(text, cfg.on_unknown)
-    if text is None and cfg.images is None and cfg.trajectories is None:
-        raise UsageError("nothing to write: give text=WORD, images=PATH and/or trajectories=JSON")
+    if all(cfg[channel] is None for channel in ("text", "audio", "images", "trajectories")):
+        raise UsageError(
+            "nothing to write: give text=WORD, audio=SOUND, images=PATH and/or trajectories=JSON"
+        )
     params = params_from_config(cfg)
+    speech = None
+    if cfg.audio is not None:  # before the model: a bad recording fails fast
+        speech = speech_input(cfg.audio, speech_params_from_config(cfg))
+        text = clean_text(speech["transcript"].word, cfg.on_unknown)
     if params.method not in ("alg1", "straight"):
         raise UsageError(f"generate.method {params.method!r}: choose alg1 or straight")
     ckpt = Path(cfg.ckpt) if cfg.ckpt else Path(cfg.models_dir) / cfg.family / "model.ckpt"
@@ -145,8 +186,15 @@ def write(cfg: DictConfig) -> tuple[WordTrajectory, Path]:
     out_dir = Path(cfg.out_dir)
     recording = None
     if cfg.record:
-        recording = {"letters": letters, "images": inputs.get("image")}
-    _save(word, path, out_dir, recording)
+        images = inputs.get("image")
+        recording = {"letters": letters, "images": None if images is None else images.numpy()}
+        if speech is not None:
+            recording.update(
+                audio=speech["samples"],
+                sample_rate=SAMPLE_RATE,
+                transcript=speech["transcript"].text,
+            )
+    save_outputs(word, path, out_dir, recording)
     log.info(
         "wrote %r with %s in %.0f ms: %d points, %.1f cm, %.1f s, DMP %d bases -> %s",
         text,
@@ -159,19 +207,18 @@ def write(cfg: DictConfig) -> tuple[WordTrajectory, Path]:
         out_dir,
     )
     if cfg.mlflow:
-        _log_run(cfg, word, out_dir, model.family, str(ckpt), seconds)
+        _log_run(cfg, word, out_dir, model.family, str(ckpt), seconds, speech)
     return word, out_dir
 
 
-def _save(
+def save_outputs(
     word: WordTrajectory, path: np.ndarray, out_dir: Path, recording: dict | None = None
 ) -> None:
+    """``word.json``, ``.png``, ``.svg``, ``dmp_rollout.csv`` and, given ``recording`` (keyword
+    arguments of :func:`prg.recording.record_write`), ``word.rrd`` into ``out_dir``, atomically."""
     with staged_outputs(out_dir) as staging:
         if recording is not None:
-            images = recording.pop("images")
-            if images is not None:
-                images = images.numpy()
-            record_write(staging / "word.rrd", word, path, images=images, **recording)
+            record_write(staging / "word.rrd", word, path, **recording)
         word.to_json(staging / "word.json")
         word.to_png(staging / "word.png")
         word.to_svg(staging / "word.svg")
@@ -186,7 +233,7 @@ def _save(
         )
 
 
-def _log_run(cfg, word, out_dir: Path, family: str, ckpt: str, seconds: float) -> None:
+def _log_run(cfg, word, out_dir: Path, family: str, ckpt: str, seconds: float, speech) -> None:
     from mlflow import MlflowClient
 
     from prg.tracking import artifact_location, get_experiment_id, tracking_uri
@@ -205,6 +252,11 @@ def _log_run(cfg, word, out_dir: Path, family: str, ckpt: str, seconds: float) -
     params.update(
         {f"generate.{k}": v for k, v in dataclasses.asdict(params_from_config(cfg)).items()}
     )
+    if speech is not None:
+        transcript = speech["transcript"]
+        params.update({f"speech.{k}": v for k, v in dataclasses.asdict(transcript).items()})
+        params.update({"audio": str(cfg.audio)})
+        client.log_metric(run_id, "write/recognise_ms", transcript.seconds * 1000)
     for key, value in params.items():
         client.log_param(run_id, key, str(value)[:500])
     for key, value in {

@@ -262,7 +262,7 @@ class WordTrajectory:
             raise UsageError(f"{path}: not a valid word trajectory: {err}") from None
 
     # ------------------------------------------------------------------ rendering
-    def _polylines(self, highlight: bool) -> list[tuple[str, np.ndarray]]:
+    def polylines(self, highlight: bool = True) -> list[tuple[str, np.ndarray]]:
         """``(kind, points)`` per drawn piece; each consecutive point pair is in one piece.
 
         A piece starts at the previous segment's last point (so the ink is continuous) unless
@@ -309,7 +309,7 @@ class WordTrajectory:
             f"<title>{escape(self.text)}</title>",
             '<rect width="100%" height="100%" fill="#ffffff"/>',
         ]
-        for kind, pts in self._polylines(highlight):
+        for kind, pts in self.polylines(highlight):
             colour, rel_width, dashes = _STYLES[kind] if highlight else _INK
             coords = " ".join(f"{x - lo[0]:.5f},{hi[1] - y:.5f}" for x, y in pts)
             dash = ""
@@ -356,7 +356,7 @@ class WordTrajectory:
         try:
             ax = fig.add_axes((0, 0, 1, 1))
             lw = pen_width_cm / 2.54 * 72  # points
-            for kind, pts in self._polylines(highlight):
+            for kind, pts in self.polylines(highlight):
                 colour, rel_width, dashes = _STYLES[kind] if highlight else _INK
                 ax.plot(
                     pts[:, 0],
