@@ -358,16 +358,11 @@ def write_reports(result: Evaluation, models, per_class, data, cfg: DictConfig, 
 def log_to_mlflow(result: Evaluation, models, cfg: DictConfig) -> str:
     """Metrics into each model's training run (if in this store) and one ``evaluate`` run with
     the reports as artifacts; returns the evaluate run's id."""
-    from mlflow import MlflowClient
     from mlflow.exceptions import MlflowException
 
-    from prg.tracking import artifact_location, get_experiment_id, tracking_uri
+    from prg.tracking import task_client
 
-    uri = tracking_uri(cfg.logger.get("tracking_uri"), cfg.paths.root_dir)
-    client = MlflowClient(uri)
-    experiment = get_experiment_id(
-        client, cfg.logger.experiment_name, artifact_location(cfg.logger.artifact_location)
-    )
+    client, experiment = task_client(cfg)
     now = int(time.time() * 1000)
     for name, (model, info, path) in models.items():
         metrics = {

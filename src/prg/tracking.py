@@ -60,6 +60,18 @@ def get_experiment_id(client, name: str, artifacts: str) -> str:
     raise RuntimeError(f"could not create or find MLflow experiment {name!r}")
 
 
+def task_client(cfg: Any) -> tuple[Any, str]:
+    """An ``MlflowClient`` on the configured store and the id of the configured experiment
+    (``cfg.logger``, ``cfg.paths.root_dir``), for commands that log runs themselves."""
+    from mlflow import MlflowClient
+
+    client = MlflowClient(tracking_uri(cfg.logger.get("tracking_uri"), cfg.paths.root_dir))
+    experiment = get_experiment_id(
+        client, cfg.logger.experiment_name, artifact_location(cfg.logger.artifact_location)
+    )
+    return client, experiment
+
+
 def mlflow_logger(
     experiment_name: str,
     run_name: str,

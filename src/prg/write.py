@@ -234,14 +234,9 @@ def save_outputs(
 
 
 def _log_run(cfg, word, out_dir: Path, family: str, ckpt: str, seconds: float, speech) -> None:
-    from mlflow import MlflowClient
+    from prg.tracking import task_client
 
-    from prg.tracking import artifact_location, get_experiment_id, tracking_uri
-
-    client = MlflowClient(tracking_uri(cfg.logger.get("tracking_uri"), cfg.paths.root_dir))
-    experiment = get_experiment_id(
-        client, cfg.logger.experiment_name, artifact_location(cfg.logger.artifact_location)
-    )
+    client, experiment = task_client(cfg)
     run = client.create_run(
         experiment,
         run_name=cfg.run_name,
