@@ -1,0 +1,396 @@
+"""The simulator's numeric core, as pure functions on arrays (no PyBullet here).
+
+Frames and units
+    The **paper frame** has its origin at the centre of the sheet, on its top surface; ``x`` runs
+    along the writing line (to the writer's right), ``y`` up the page (away from the writer) and
+    ``z`` out of the paper. Word and ink coordinates are centimetres in this frame (the word's own
+    convention: y up); world coordinates are metres (PyBullet's). :class:`Paper` converts.
+
+Contact band
+    The pen is a tool offset without collision geometry: the pen tip *inks* the paper while its
+    height above the surface is within ``[-band, +band]`` (:func:`in_contact`). Consecutive tip
+    samples in contact form ink strokes.
+
+Tracking error
+    Distance, in the paper plane, between the commanded pen-down path and the ink, both ways
+    (:func:`tracking_error`): every commanded sample to the nearest point of the ink polylines
+    and every ink point to the nearest point of the commanded polylines. Mean and max are over
+    both sets together (the max is the Hausdorff distance of the two paths).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from prg.errors import UsageError
+
+__all__ = [
+    "Paper",
+    "arc_length",
+    "arc_progress",
+    "bounding_box",
+    "distance_to_polylines",
+    "in_contact",
+    "max_ink_gap",
+    "min_jerk",
+    "pen_down_samples",
+    "place_points",
+    "runs",
+    "tracking_error",
+]
+
+_Float = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Paper:
+    """A sheet on the table: size and pose.
+
+    Attributes
+    ----------
+    size_cm : tuple of float
+        Width (along the paper's x, the writing line) and height, in cm.
+    centre : tuple of float
+        Centre of the top surface in the world (m).
+    yaw_deg : float
+        Heading of the paper's x axis in the world (degrees about z; ``-90``: x along world
+        ``-y``, so a robot at the origin facing ``+x`` writes left to right as it sees it).
+    thickness_m : float
+        Thickness of the sheet (m); it lies on the table, its top surface at ``centre[2]``.
+    """
+
+    size_cm: tuple[float, float] = (29.7, 21.0)
+    centre: tuple[float, float, float] = (0.55, 0.0, 0.6255)
+    yaw_deg: float = -90.0
+    thickness_m: float = 0.0005
+
+    def __post_init__(self) -> None:
+        size = np.asarray(self.size_cm, dtype=np.float64)
+        if size.shape != (2,) or not np.all(np.isfinite(size)) or np.any(size <= 0):
+            raise UsageError(f"paper.size_cm must be two positive numbers, got {self.size_cm!r}")
+        centre = np.asarray(self.centre, dtype=np.float64)
+        if centre.shape != (3,) or not np.all(np.isfinite(centre)):
+            raise UsageError(f"paper.centre must be three numbers (m), got {self.centre!r}")
+        if not math.isfinite(self.yaw_deg):
+            raise UsageError(f"paper.yaw_deg must be a number, got {self.yaw_deg!r}")
+        if not (math.isfinite(self.thickness_m) and self.thickness_m > 0):
+            raise UsageError(f"paper.thickness_m must be positive, got {self.thickness_m!r}")
+
+    @property
+    def rotation(self) -> _Float:
+        """World-from-paper rotation, shape (3, 3): columns are the paper's axes in the world."""
+        c, s = math.cos(math.radians(self.yaw_deg)), math.sin(math.radians(self.yaw_deg))
+        return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+    @property
+    def quaternion(self) -> tuple[float, float, float, float]:
+        """World-from-paper orientation (x, y, z, w)."""
+        half = math.radians(self.yaw_deg) / 2
+        return (0.0, 0.0, math.sin(half), math.cos(half))
+
+    def to_world(self, points_cm: ArrayLike) -> _Float:
+        """Paper-frame points (cm) to world points (m).
+
+        Parameters
+        ----------
+        points_cm : array_like, shape (n, 2) or (n, 3)
+            ``(x, y)`` on the paper or ``(x, y, height)`` above it, in cm.
+
+        Returns
+        -------
+        ndarray, shape (n, 3)
+        """
+        pts = np.asarray(points_cm, dtype=np.float64)
+        if pts.ndim != 2 or pts.shape[1] not in (2, 3):
+            raise UsageError(f"points must have shape (n, 2) or (n, 3), got {pts.shape}")
+        if pts.shape[1] == 2:
+            pts = np.column_stack([pts, np.zeros(len(pts))])
+        return pts / 100.0 @ self.rotation.T + np.asarray(self.centre)
+
+    def to_paper(self, points_m: ArrayLike) -> _Float:
+        """World points (m) to paper-frame ``(x, y, height)`` in cm, shape (n, 3)."""
+        pts = np.asarray(points_m, dtype=np.float64).reshape(-1, 3)
+        return (pts - np.asarray(self.centre)) @ self.rotation * 100.0
+
+    def contains(self, points_cm: ArrayLike, margin_cm: float = 0.0) -> NDArray[np.bool_]:
+        """Whether each ``(x, y)`` lies on the sheet, at least ``margin_cm`` from its edges."""
+        pts = np.asarray(points_cm, dtype=np.float64)[:, :2]
+        half = np.asarray(self.size_cm) / 2 - margin_cm
+        return np.all(np.abs(pts) <= half, axis=1)
+
+
+# ----------------------------------------------------------------------------- paths
+
+
+def arc_length(points: ArrayLike) -> _Float:
+    """Cumulative arc length of a polyline, shape (n,), starting at 0."""
+    pts = np.asarray(points, dtype=np.float64)
+    steps = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    return np.concatenate([[0.0], np.cumsum(steps)])
+
+
+def bounding_box(points: ArrayLike) -> tuple[_Float, _Float]:
+    """Lower-left and upper-right corners of ``points`` (n, 2)."""
+    pts = np.asarray(points, dtype=np.float64)
+    return pts.min(axis=0), pts.max(axis=0)
+
+
+def place_points(points: ArrayLike, anchor: ArrayLike, scale: float, target: ArrayLike) -> _Float:
+    """Scale ``points`` about ``anchor`` and move ``anchor`` to ``target``.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 2)
+    anchor, target : array_like, shape (2,)
+    scale : float
+
+    Returns
+    -------
+    ndarray, shape (n, 2)
+        ``target + scale * (points - anchor)``.
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    return np.asarray(target, dtype=np.float64) + scale * (pts - np.asarray(anchor, dtype=float))
+
+
+def arc_progress(path: ArrayLike, samples: ArrayLike) -> _Float:
+    """Arc length along ``path`` of each sample of a motion that follows it in order.
+
+    Each sample is projected onto the polyline, searching forward from the previous sample's
+    projection only (within a few sample steps), so a path that crosses itself (loops, a ``t``'s
+    bar) is still followed in order.
+
+    Parameters
+    ----------
+    path : array_like, shape (P, 2)
+        The polyline (e.g. a word's points).
+    samples : array_like, shape (n, 2)
+        Points close to the path, in its order (e.g. the word's DMP rollout).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Non-decreasing arc length (same units as ``path``) of each sample's projection.
+    """
+    pts = np.asarray(path, dtype=np.float64)
+    smp = np.asarray(samples, dtype=np.float64)
+    if len(pts) < 2:
+        return np.zeros(len(smp))
+    arc = arc_length(pts)
+    a, b = pts[:-1], pts[1:]
+    d = b - a
+    length2 = np.maximum((d**2).sum(axis=1), 1e-30)
+    step = np.linalg.norm(np.diff(smp, axis=0), axis=1) if len(smp) > 1 else np.zeros(1)
+    # a sample moves at most its own step along the path (plus slack for the DMP's error)
+    reach = 4.0 * (float(step.max()) if len(step) else 0.0) + 0.05 * (arc[-1] / len(pts)) + 1e-9
+    out = np.empty(len(smp))
+    s_prev, first = 0.0, 0
+    for k, point in enumerate(smp):
+        last = int(np.searchsorted(arc, s_prev + reach, side="right"))
+        last = min(max(last, first + 1), len(a))
+        seg = slice(first, last)
+        u = np.clip(((point - a[seg]) * d[seg]).sum(axis=1) / length2[seg], 0.0, 1.0)
+        foot = a[seg] + u[:, None] * d[seg]
+        j = int(np.argmin(((foot - point) ** 2).sum(axis=1)))
+        s = arc[first + j] + u[j] * math.sqrt(length2[first + j])
+        s_prev = max(s_prev, s)
+        out[k] = s_prev
+        first = max(first, int(np.searchsorted(arc, s_prev, side="right")) - 1)
+        first = min(first, len(a) - 1)
+    return out
+
+
+def pen_down_samples(
+    points: ArrayLike, segment: ArrayLike, kinds: Sequence[str], samples: ArrayLike
+) -> NDArray[np.bool_]:
+    """Which samples of a motion along a word are pen-down (not pen-up travel between words).
+
+    Parameters
+    ----------
+    points : array_like, shape (P, 2)
+        The word's points (:class:`~prg.pipeline.word.WordTrajectory` ``points``).
+    segment : array_like of int, shape (P,)
+        Segment id per point.
+    kinds : sequence of str
+        Kind per segment; ``"space"`` segments are pen-up.
+    samples : array_like, shape (n, 2)
+        The motion (e.g. the DMP rollout), in the word's order.
+
+    Returns
+    -------
+    ndarray of bool, shape (n,)
+        False for samples strictly inside a pen-up travel, i.e. past the last point of the letter
+        before it and before the first point of the letter after it (by arc length).
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    seg = np.asarray(segment)
+    down = np.ones(len(samples), dtype=bool)
+    spaces = [k for k, kind in enumerate(kinds) if kind == "space"]
+    if not spaces:
+        return down
+    arc = arc_length(pts)
+    s = arc_progress(pts, samples)
+    for k in spaces:
+        inside = np.flatnonzero(seg == k)
+        before = inside[0] - 1 if inside[0] > 0 else inside[0]
+        after = inside[-1] + 1 if inside[-1] + 1 < len(pts) else inside[-1]
+        down &= ~((s > arc[before]) & (s < arc[after]))
+    return down
+
+
+def runs(mask: ArrayLike) -> list[tuple[int, int]]:
+    """``(start, stop)`` index ranges (stop exclusive) of the consecutive True runs of ``mask``."""
+    m = np.asarray(mask, dtype=bool).astype(np.int8)
+    edges = np.diff(np.concatenate([[0], m, [0]]))
+    return list(zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist()))
+
+
+def min_jerk(n: int) -> _Float:
+    """The minimum-jerk rest-to-rest profile ``10u^3 - 15u^4 + 6u^5`` on ``n`` samples of [0, 1]."""
+    u = np.linspace(0.0, 1.0, n)
+    return u**3 * (10.0 - 15.0 * u + 6.0 * u**2)
+
+
+# ----------------------------------------------------------------------------- ink and errors
+
+
+def in_contact(heights_cm: ArrayLike, band_mm: float) -> NDArray[np.bool_]:
+    """Whether the pen tip inks: its height above the paper is within ``+-band_mm``.
+
+    Parameters
+    ----------
+    heights_cm : array_like, shape (n,)
+        Tip height above the paper surface (cm; negative: pressed into it).
+    band_mm : float
+        Half-width of the contact band (mm), > 0.
+
+    Returns
+    -------
+    ndarray of bool, shape (n,)
+    """
+    if not band_mm > 0:
+        raise UsageError(f"contact band must be positive (mm), got {band_mm!r}")
+    return np.abs(np.asarray(heights_cm, dtype=np.float64)) <= band_mm / 10.0
+
+
+def distance_to_polylines(points: ArrayLike, polylines: Sequence[ArrayLike]) -> _Float:
+    """Distance from each point to the nearest point of any of the polylines.
+
+    Exact (segment distances), with a k-d tree over the vertices to limit the candidates: a
+    segment nearer than the nearest vertex ``d`` has an end within ``d + longest segment``.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 2)
+    polylines : sequence of array_like, each shape (m_i, 2)
+        Separate strokes (no segment joins one stroke to the next); a one-point stroke is a dot.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        ``inf`` everywhere if there are no polylines.
+    """
+    from scipy.spatial import cKDTree
+
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    lines = [np.asarray(p, dtype=np.float64).reshape(-1, 2) for p in polylines]
+    lines = [p for p in lines if len(p)]
+    if not lines or not len(pts):
+        return np.full(len(pts), np.inf)
+    verts = np.concatenate(lines)
+    stroke = np.concatenate([np.full(len(p), i) for i, p in enumerate(lines)])
+    # segment j joins vertex j and j + 1 when both are in one stroke; else it is the dot at j
+    nxt = np.minimum(np.arange(len(verts)) + 1, len(verts) - 1)
+    nxt = np.where(stroke[nxt] == stroke, nxt, np.arange(len(verts)))
+    a, b = verts, verts[nxt]
+    longest = float(np.linalg.norm(b - a, axis=1).max())
+    tree = cKDTree(verts)
+    out = np.empty(len(pts))
+    todo = np.arange(len(pts))
+    k = min(16, len(verts))
+    while len(todo):
+        dist, idx = tree.query(pts[todo], k=k)
+        dist, idx = dist.reshape(len(todo), -1), idx.reshape(len(todo), -1)
+        cand = np.concatenate([idx, np.maximum(idx - 1, 0)], axis=1)  # segments at each vertex
+        ca, cb = a[cand], b[cand]
+        d = cb - ca
+        u = ((pts[todo][:, None] - ca) * d).sum(-1) / np.maximum((d**2).sum(-1), 1e-30)
+        foot = ca + np.clip(u, 0.0, 1.0)[..., None] * d
+        best = np.linalg.norm(foot - pts[todo][:, None], axis=-1).min(axis=1)
+        exact = (k >= len(verts)) | (dist[:, -1] >= dist[:, 0] + longest)
+        out[todo[exact]] = best[exact]
+        todo = todo[~exact]
+        k = min(4 * k, len(verts))
+    return out
+
+
+def tracking_error(commanded: Sequence[ArrayLike], ink: Sequence[ArrayLike]) -> dict[str, float]:
+    """Tracking error between the commanded pen-down strokes and the ink strokes (paper plane).
+
+    Parameters
+    ----------
+    commanded : sequence of array_like, each shape (n_i, 2)
+        Commanded pen-down strokes (cm).
+    ink : sequence of array_like, each shape (m_j, 2)
+        Ink strokes (cm).
+
+    Returns
+    -------
+    dict
+        ``mean_mm`` and ``max_mm`` over every commanded sample's distance to the ink and every
+        ink point's distance to the command; ``command_to_ink_max_mm`` (missing or displaced
+        ink) and ``ink_to_command_max_mm`` (stray ink) separately. ``inf`` when there is no ink.
+    """
+    cmd = np.concatenate([np.asarray(c, dtype=float).reshape(-1, 2) for c in commanded])
+    inked = [np.asarray(s, dtype=float).reshape(-1, 2) for s in ink]
+    to_ink = distance_to_polylines(cmd, inked)
+    ink_pts = np.concatenate(inked) if inked else np.empty((0, 2))
+    to_cmd = distance_to_polylines(ink_pts, commanded)
+    both = np.concatenate([to_ink, to_cmd]) * 10.0
+    return {
+        "mean_mm": float(both.mean()),
+        "max_mm": float(both.max()),
+        "command_to_ink_max_mm": float(to_ink.max() * 10.0),
+        "ink_to_command_max_mm": float(to_cmd.max() * 10.0) if len(to_cmd) else 0.0,
+    }
+
+
+def max_ink_gap(
+    commanded: Sequence[ArrayLike], ink_points: ArrayLike, ink_stroke: ArrayLike
+) -> float:
+    """The longest stretch of a commanded stroke left without ink (cm).
+
+    For each commanded stroke ``k``, its ink is the ink points tagged ``k`` (in time order):
+    the gap is the largest of the distance from the stroke's start to its first ink point, the
+    distances between consecutive ink points, and from the last ink point to the stroke's end.
+    A stroke without any ink counts its whole length.
+
+    Parameters
+    ----------
+    commanded : sequence of array_like, each shape (n_k, 2)
+    ink_points : array_like, shape (m, 2)
+        Every ink point, in time order.
+    ink_stroke : array_like of int, shape (m,)
+        Commanded stroke each ink point was made during (``-1``: none).
+
+    Returns
+    -------
+    float
+    """
+    ink = np.asarray(ink_points, dtype=np.float64).reshape(-1, 2)
+    tag = np.asarray(ink_stroke)
+    worst = 0.0
+    for k, stroke in enumerate(commanded):
+        cmd = np.asarray(stroke, dtype=np.float64).reshape(-1, 2)
+        mine = ink[tag == k]
+        if not len(mine):
+            worst = max(worst, float(arc_length(cmd)[-1]) if len(cmd) > 1 else math.inf)
+            continue
+        chain = np.concatenate([cmd[:1], mine, cmd[-1:]])
+        worst = max(worst, float(np.linalg.norm(np.diff(chain, axis=0), axis=1).max()))
+    return worst

@@ -1,0 +1,377 @@
+"""Rerun recording (``sim.rrd``) of the simulated robot writing a word.
+
+Written through :func:`prg.recording.recording_stream` (explicit stream, atomic file) on one
+duration timeline, ``sim_time`` (simulated seconds). Entity paths:
+
+==================================  ====================  =========================================
+entity                              archetype             when
+==================================  ====================  =========================================
+``world``                           ViewCoordinates       static: right-handed, z up (metres)
+``world/table``, ``world/paper``    Boxes3D               static
+``world/<arm>/...``                  URDF (Rerun's import)  static: link meshes, frames, joints at 0
+``world/<arm>/base``                Transform3D           static: ``tf#/world`` -> the URDF's root
+``world/<arm>/joints/<joint>``      Transform3D           per frame, one ``send_columns`` per joint
+``world/<arm>/pen``                 Cylinders3D           static, in the flange link's frame
+``world/commanded``                 LineStrips3D          static: the commanded pen-down strokes
+``world/pen/tip``                   Points3D              per frame
+``world/pen/path``                  LineStrips3D          one segment per frame (the tip's path)
+``world/ink``                       LineStrips3D          one segment per inked physics step
+``page/commanded``                  LineStrips2D          static (paper frame, cm, y flipped)
+``page/ink``                        LineStrips2D          one segment per inked physics step
+``page/pen``                        Points2D              per frame (the tip over the page)
+``page_render``                     EncodedImage          static: the TinyRenderer page picture
+``joints/<joint>``                  Scalars               per frame (rad)
+``summary``                         TextDocument          static: the metrics
+==================================  ====================  =========================================
+
+The arm is Rerun's own URDF import (:class:`rerun.urdf.UrdfTree`) of the same URDF PyBullet
+loads (collision geometry left out, ``package://`` mesh paths made absolute). Since Rerun 0.28
+URDF links are *named transform frames*: the import logs every link's geometry with a
+:class:`rerun.CoordinateFrame` and every joint (at 0) as a static ``Transform3D`` between its
+parent and child link frames under ``world/<arm>/tf_static``; the animation sends, per revolute
+joint, its transform at each frame's joint angle
+(:meth:`rerun.urdf.UrdfJoint.compute_transform_columns`) on ``world/<arm>/joints/<joint>``, and
+one static transform places the URDF's root link at the robot's base pose in ``tf#/world``.
+``<arm>`` is the URDF's robot name (``panda``, ``lbr_iiwa``).
+
+*Frames* are every ``every``-th physics step (the IK waypoint rate by default); the ink is logged
+at every physics step. Growing paths (ink, tip path) are one two-point segment per row, shown
+accumulated by the default blueprint with a visible time range from the start to the cursor
+(:func:`prg.recording.log_rollout`'s idiom): the data grow linearly with the steps.
+"""
+
+from __future__ import annotations
+
+import io
+import logging
+import os
+import tempfile
+import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import rerun as rr
+import rerun.blueprint as rrb
+
+from prg.recording import Y_SIGN, recording_stream
+from prg.sim.geometry import runs
+from prg.sim.robots import RobotConfig
+from prg.sim.scene import TABLE_TOP_Z
+from prg.sim.writing import SimResult
+
+log = logging.getLogger(__name__)
+
+__all__ = ["TIMELINE", "record_simulation", "recording_urdf", "sim_blueprint"]
+
+TIMELINE = "sim_time"
+INK = (20, 20, 20)
+COMMANDED = (120, 170, 255)
+TIP = (31, 119, 180)
+PATH = (255, 150, 40)
+PAPER = (250, 250, 250)
+TABLE = (200, 170, 130)
+PEN = (25, 50, 180)
+LIFT_M = 0.0002  # draw paths this far over the paper so they are not hidden in it
+
+
+def recording_urdf(robot: RobotConfig, folder: str | os.PathLike) -> Path:
+    """A copy of the robot's URDF for Rerun's importer: visual geometry only, mesh paths
+    absolute (``package://`` and relative paths resolved against the URDF's folder).
+
+    Returns
+    -------
+    Path
+        ``<folder>/<robot>.urdf``.
+    """
+    source = robot.urdf_path
+    tree = ET.parse(source)
+    root = tree.getroot()
+    for link in root.iter("link"):
+        for collision in link.findall("collision"):
+            link.remove(collision)
+    for mesh in root.iter("mesh"):
+        name = mesh.get("filename", "")
+        if name.startswith("package://"):
+            name = name[len("package://") :]
+        if not Path(name).is_absolute():
+            name = str((source.parent / name).resolve())
+        mesh.set("filename", name)
+    out = Path(folder) / f"{robot.name}.urdf"
+    tree.write(out)
+    return out
+
+
+def _segments(points: np.ndarray, keep: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Indices ``i`` of the rows ``(points[i - 1], points[i])`` joining two kept samples of one
+    run, and the segments themselves, shape (k, 2, dims)."""
+    rows = [np.arange(a + 1, b) for a, b in runs(keep)]
+    idx = np.concatenate(rows) if rows else np.empty(0, dtype=int)
+    return idx, np.stack([points[idx - 1], points[idx]], axis=1)
+
+
+def _pen_geometry(robot: RobotConfig) -> rr.Cylinders3D:
+    offset = np.asarray(robot.pen_offset, dtype=np.float64)
+    axis = offset / np.linalg.norm(offset)
+    centre = offset - axis * robot.pen_length / 2
+    z = np.array([0.0, 0.0, 1.0])
+    cross = np.cross(z, axis)
+    if np.linalg.norm(cross) < 1e-12:
+        quat = [0.0, 0.0, 0.0, 1.0] if axis[2] > 0 else [1.0, 0.0, 0.0, 0.0]
+    else:
+        half = np.arccos(np.clip(axis @ z, -1, 1)) / 2
+        quat = [*(cross / np.linalg.norm(cross) * np.sin(half)), np.cos(half)]
+    return rr.Cylinders3D(
+        lengths=[robot.pen_length],
+        radii=[robot.pen_radius],
+        centers=[centre],
+        quaternions=[rr.Quaternion(xyzw=quat)],
+        colors=[PEN],
+        fill_mode="solid",
+    )
+
+
+def sim_blueprint(result: SimResult) -> rrb.Blueprint:
+    """The default layout: the 3D scene (arm, paper, growing ink), the page with its ink, the
+    final page render, the joint angles and the metrics."""
+    trail = rrb.VisibleTimeRanges(
+        timeline=TIMELINE,
+        start=rrb.TimeRangeBoundary.infinite(),
+        end=rrb.TimeRangeBoundary.cursor_relative(),
+    )
+    paper = result.settings.paper
+    centre = np.asarray(paper.centre)
+    eye = centre + np.array([-0.45, -0.55, 0.45])
+    scene = rrb.Spatial3DView(
+        origin="world",
+        name=f"{result.robot.name} writes {result.text!r}",
+        background=(235, 235, 240),
+        eye_controls=rrb.EyeControls3D(
+            position=eye.tolist(), look_target=centre.tolist(), eye_up=(0.0, 0.0, 1.0)
+        ),
+        overrides={
+            "world/ink": [trail, rr.LineStrips3D.from_fields().visualizer()],
+            "world/pen/path": [trail, rr.LineStrips3D.from_fields().visualizer()],
+        },
+    )
+    page = rrb.Spatial2DView(
+        origin="page",
+        name="Ink on the page (cm)",
+        background=(255, 255, 255),
+        overrides={"page/ink": [trail, rr.LineStrips2D.from_fields().visualizer()]},
+    )
+    side = [page]
+    if result.page is not None:
+        side.append(rrb.Spatial2DView(origin="page_render", name="Page render (TinyRenderer)"))
+    side.append(rrb.TimeSeriesView(origin="joints", name="Joint angles (rad)"))
+    side.append(rrb.TextDocumentView(origin="summary", name="Summary"))
+    return rrb.Blueprint(
+        rrb.Horizontal(rrb.Vertical(scene), rrb.Vertical(*side), column_shares=[3, 2]),
+        rrb.TimePanel(timeline=TIMELINE),
+        collapse_panels=False,
+    )
+
+
+def _summary(result: SimResult) -> str:
+    m = result.metrics
+    return "\n".join(
+        [
+            f"# {result.robot.name} writes {result.text!r}",
+            "",
+            f"- tracking error: mean {m['tracking_error_mean_mm']:.4f} mm, "
+            f"max {m['tracking_error_max_mm']:.4f} mm",
+            f"- longest ink gap: {m['max_ink_gap_mm']:.3f} mm (pen step {m['pen_step_mm']:.3f} mm)",
+            f"- word: {m['word_width_cm']:.2f} x {m['word_height_cm']:.2f} cm "
+            f"(scale {m['scale']:g}); {m['ink_strokes']} ink strokes",
+            f"- simulated {m['sim_s']:.2f} s in {m['wall_s'] + m['ik_wall_s']:.2f} s wall "
+            f"(real-time factor {m['realtime_factor']:.1f})",
+            "- coordinates: world in metres (z up); page in cm, logged as (x, -y)",
+        ]
+    )
+
+
+def record_simulation(
+    path: str | os.PathLike,
+    result: SimResult,
+    *,
+    every: int | None = None,
+    application_id: str = "prg-simulate",
+) -> Path:
+    """Record the simulation to an ``.rrd`` file, atomically (entities in the module docstring).
+
+    Parameters
+    ----------
+    path : path-like
+    result : SimResult
+    every : int, optional
+        Log the arm, the pen tip and the joint angles every ``every`` physics steps (default:
+        ``steps_per_waypoint``); the ink is logged at every step.
+    application_id : str
+
+    Returns
+    -------
+    Path
+    """
+    from rerun.urdf import UrdfTree
+
+    start = time.perf_counter()
+    robot = result.robot
+    paper = result.settings.paper
+    every = every or result.settings.control.steps_per_waypoint
+    frames = np.arange(every - 1, len(result.t), every)
+    if frames[-1] != len(result.t) - 1:
+        frames = np.append(frames, len(result.t) - 1)
+    t_frames = result.t[frames]
+    lift = np.array([0.0, 0.0, LIFT_M])
+    with (
+        tempfile.TemporaryDirectory(prefix="prg-urdf-") as tmp,
+        recording_stream(path, application_id, blueprint=sim_blueprint(result)) as rec,
+    ):
+        rec.log(
+            "summary", rr.TextDocument(_summary(result), media_type="text/markdown"), static=True
+        )
+        rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        rec.log(
+            "world/table",
+            rr.Boxes3D(
+                centers=[[paper.centre[0], 0.0, TABLE_TOP_Z - 0.025]],
+                half_sizes=[[0.75, 0.5, 0.025]],
+                colors=[TABLE],
+                fill_mode="solid",
+            ),
+            static=True,
+        )
+        rec.log(
+            "world/paper",
+            rr.Boxes3D(
+                centers=[np.asarray(paper.centre) - [0.0, 0.0, paper.thickness_m / 2]],
+                half_sizes=[
+                    [paper.size_cm[0] / 200, paper.size_cm[1] / 200, paper.thickness_m / 2]
+                ],
+                quaternions=[rr.Quaternion(xyzw=paper.quaternion)],
+                colors=[PAPER],
+                fill_mode="solid",
+            ),
+            static=True,
+        )
+
+        # the arm: URDF once, its root at the base pose, each revolute joint animated
+        urdf = recording_urdf(robot, tmp)
+        arm = f"world/{UrdfTree.from_file_path(urdf).name}"
+        tree = UrdfTree.from_file_path(
+            urdf, entity_path_prefix="world", static_transform_entity_path=f"{arm}/tf_static"
+        )
+        tree.log_urdf_to_recording(rec)
+        rec.log(
+            f"{arm}/base",
+            rr.Transform3D(
+                translation=robot.base_position,
+                quaternion=rr.Quaternion(xyzw=robot.base_quaternion),
+                parent_frame="tf#/world",
+                child_frame=tree.root_link().name,
+            ),
+            static=True,
+        )
+        times = [rr.TimeColumn(TIMELINE, duration=t_frames)]
+        for j, name in enumerate(robot.arm_joints):
+            joint = tree.get_joint_by_name(name)
+            rec.send_columns(
+                f"{arm}/joints/{name}",
+                indexes=times,
+                columns=joint.compute_transform_columns(result.q[frames, j], clamp=False),
+            )
+            rec.send_columns(
+                f"joints/{name}",
+                indexes=times,
+                columns=rr.Scalars.columns(scalars=result.q[frames, j]),
+            )
+        rec.log(
+            f"{arm}/pen", rr.CoordinateFrame(robot.flange_link), _pen_geometry(robot), static=True
+        )
+
+        # the commanded strokes, the pen tip, its path and the ink
+        commanded = result.plan.strokes()
+        rec.log(
+            "world/commanded",
+            rr.LineStrips3D(
+                [paper.to_world(np.column_stack([c, np.zeros(len(c))])) + lift for c in commanded],
+                colors=[COMMANDED],
+                radii=rr.Radius.ui_points(1.0),
+            ),
+            static=True,
+        )
+        rec.log(
+            "page/commanded",
+            rr.LineStrips2D(
+                [c * Y_SIGN for c in commanded],
+                colors=[COMMANDED],
+                radii=rr.Radius.ui_points(3.0),
+                draw_order=1.0,
+            ),
+            static=True,
+        )
+        tip = result.tip_world[frames]
+        rec.log("world/pen/tip", rr.Points3D.from_fields(colors=[TIP], radii=[0.002]), static=True)
+        rec.send_columns("world/pen/tip", indexes=times, columns=rr.Points3D.columns(positions=tip))
+        rec.log(
+            "world/pen/path",
+            rr.LineStrips3D.from_fields(colors=[PATH], radii=rr.Radius.ui_points(1.0)),
+            static=True,
+        )
+        rec.send_columns(
+            "world/pen/path",
+            indexes=[rr.TimeColumn(TIMELINE, duration=t_frames[1:])],
+            columns=rr.LineStrips3D.columns(strips=np.stack([tip[:-1], tip[1:]], axis=1)),
+        )
+        rec.log(
+            "page/pen",
+            rr.Points2D.from_fields(colors=[TIP], radii=rr.Radius.ui_points(6.0), draw_order=30.0),
+            static=True,
+        )
+        rec.send_columns(
+            "page/pen",
+            indexes=times,
+            columns=rr.Points2D.columns(positions=result.tip_paper[frames, :2] * Y_SIGN),
+        )
+        rows, ink3d = _segments(result.tip_world + lift, result.contact)
+        _, ink2d = _segments(result.tip_paper[:, :2] * Y_SIGN, result.contact)
+        rec.log(
+            "world/ink",
+            rr.LineStrips3D.from_fields(colors=[INK], radii=rr.Radius.ui_points(2.0)),
+            static=True,
+        )
+        rec.log(
+            "page/ink",
+            rr.LineStrips2D.from_fields(
+                colors=[INK], radii=rr.Radius.ui_points(2.0), draw_order=20.0
+            ),
+            static=True,
+        )
+        if len(rows):
+            ink_times = [rr.TimeColumn(TIMELINE, duration=result.t[rows])]
+            rec.send_columns(
+                "world/ink", indexes=ink_times, columns=rr.LineStrips3D.columns(strips=ink3d)
+            )
+            rec.send_columns(
+                "page/ink", indexes=ink_times, columns=rr.LineStrips2D.columns(strips=ink2d)
+            )
+        if result.page is not None:
+            from PIL import Image
+
+            buffer = io.BytesIO()
+            Image.fromarray(result.page).save(buffer, format="PNG")
+            rec.log(
+                "page_render",
+                rr.EncodedImage(contents=buffer.getvalue(), media_type="image/png"),
+                static=True,
+            )
+    log.info(
+        "recorded %s writing %r to %s in %.2f s (%d frames, %d ink segments)",
+        robot.name,
+        result.text,
+        path,
+        time.perf_counter() - start,
+        len(frames),
+        len(rows),
+    )
+    return Path(path)
