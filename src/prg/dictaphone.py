@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 from omegaconf import DictConfig, OmegaConf
+from scipy.signal import spectrogram
 
 from prg.cli import hydra_command
 from prg.data.alphabet import char_to_label
@@ -253,10 +254,17 @@ def _figure(words: list[str], channels: list[str], items: dict, path: Path) -> N
         top, bottom = axes[0, col], axes[1, col]
         source = items[word, channel]
         if channel == "sound":
-            with np.errstate(divide="ignore"):  # digital silence has zero power
-                top.specgram(source, NFFT=256, Fs=SAMPLE_RATE, noverlap=192, cmap="magma")
-            top.set_xlim(0, len(source) / SAMPLE_RATE)
-            top.set_ylim(0, 6000)
+            freqs, _, power = spectrogram(source, fs=SAMPLE_RATE, nperseg=256, noverlap=192)
+            shown = freqs <= 6000
+            decibels = 10 * np.log10(power[shown] + 1e-12)  # digital silence has zero power
+            top.imshow(
+                decibels,
+                origin="lower",
+                aspect="auto",
+                cmap="magma",
+                vmin=decibels.max() - 80,
+                extent=(0, len(source) / SAMPLE_RATE, 0, freqs[shown][-1]),
+            )
         else:
             top.imshow(np.concatenate(source, axis=1), cmap="gray", vmin=0, vmax=255)
         top.set_title(f"{word}: {channel}", fontsize=10)
