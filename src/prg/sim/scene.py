@@ -67,9 +67,13 @@ class IKSettings:
     Attributes
     ----------
     null_space_iterations : int
-        Iterations of the null-space solve (rest pose, joint limits and ranges).
+        Iterations of the null-space solve (rest pose, joint limits and ranges) when seeded
+        with the previous waypoint's solution.
     refine_iterations : int
         Iterations of the plain (damped least squares) refinement seeded from it.
+    cold_iterations : int
+        Iterations of both solves when starting from the rest pose (the first waypoint, the
+        workspace map's nodes): far targets need more.
     residual : float
         Residual threshold of both solves (m).
     tolerance_mm : float
@@ -79,11 +83,21 @@ class IKSettings:
         False: the null-space solve alone (the reference the benchmark compares with).
     """
 
-    null_space_iterations: int = 100
+    null_space_iterations: int = 20
     refine_iterations: int = 100
+    cold_iterations: int = 100
     residual: float = 1e-7
     tolerance_mm: float = 0.5
     refine: bool = True
+
+    def __post_init__(self) -> None:
+        for name in ("null_space_iterations", "refine_iterations", "cold_iterations"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or int(value) != value or value < 1:
+                raise UsageError(f"ik.{name} must be a positive integer, got {value!r}")
+        for name in ("residual", "tolerance_mm"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0):
+                raise UsageError(f"ik.{name} must be positive, got {getattr(self, name)!r}")
 
 
 def _rotate(quaternion: ArrayLike, vector: ArrayLike) -> NDArray[np.float64]:
@@ -187,8 +201,12 @@ class IKSolver:
 
     def set_state(self, q_movable: ArrayLike) -> None:
         """Put the kinematic copy in posture ``q_movable`` (one value per movable joint)."""
-        for j, q in zip(self.robot.movable, q_movable):
-            self.p.resetJointState(self.robot.body, j, float(q), physicsClientId=self.cid)
+        self.p.resetJointStatesMultiDof(
+            self.robot.body,
+            list(self.robot.movable),
+            [[float(q)] for q in q_movable],
+            physicsClientId=self.cid,
+        )
 
     def tip(self, q_movable: ArrayLike) -> NDArray[np.float64]:
         """Pen-tip position (world, m) in posture ``q_movable``."""
@@ -213,7 +231,8 @@ class IKSolver:
         ----------
         tip : array_like, shape (3,)
         seed : array_like, shape (len(movable),), optional
-            Start posture (default: the rest pose); pass the previous waypoint's solution.
+            Start posture: the previous waypoint's solution. Without one the solve starts
+            from the rest pose with ``cold_iterations``.
 
         Returns
         -------
@@ -227,6 +246,8 @@ class IKSolver:
         target = np.asarray(tip, dtype=np.float64)
         flange = (target - self._flange_offset).tolist()
         self.set_state(self._rest if seed is None else seed)
+        null_space = s.cold_iterations if seed is None else s.null_space_iterations
+        refine = s.cold_iterations if seed is None else s.refine_iterations
         q = p.calculateInverseKinematics(
             r.body,
             r.flange,
@@ -236,7 +257,7 @@ class IKSolver:
             upperLimits=self._upper,
             jointRanges=self._ranges,
             restPoses=self._rest,
-            maxNumIterations=s.null_space_iterations,
+            maxNumIterations=null_space,
             residualThreshold=s.residual,
             physicsClientId=self.cid,
         )
@@ -247,7 +268,7 @@ class IKSolver:
                 r.flange,
                 flange,
                 PEN_DOWN,
-                maxNumIterations=s.refine_iterations,
+                maxNumIterations=refine,
                 residualThreshold=s.residual,
                 physicsClientId=self.cid,
             )
@@ -271,7 +292,7 @@ class IKSolver:
         tips : array_like, shape (n, 3)
             World positions (m).
         seed : array_like, optional
-            Posture before the first target (default: rest pose).
+            Posture before the first target (default: a cold start from the rest pose).
         describe : callable, optional
             ``describe(i) -> str`` naming target ``i`` for the error message.
 
@@ -289,7 +310,7 @@ class IKSolver:
         targets = np.asarray(tips, dtype=np.float64)
         out = np.empty((len(targets), len(self.robot.movable)))
         errors = np.empty(len(targets))
-        q = self.robot.rest_movable if seed is None else np.asarray(seed, dtype=np.float64)
+        q = None if seed is None else np.asarray(seed, dtype=np.float64)
         for i, tip in enumerate(targets):
             q, err = self.solve(tip, q)
             if err * 1000.0 > self.settings.tolerance_mm:

@@ -239,20 +239,28 @@ class ReachMap:
             self._nodes[key] = ok
         return self._nodes[key]
 
-    def reachable(self, points_cm: NDArray[np.float64]) -> NDArray[np.bool_]:
-        """Whether each point ``(x, y)`` (paper frame, cm) is on the sheet and reachable."""
+    def reachable(
+        self, points_cm: NDArray[np.float64], stop_early: bool = False
+    ) -> NDArray[np.bool_]:
+        """Whether each point ``(x, y)`` (paper frame, cm) is on the sheet and reachable.
+
+        With ``stop_early``, cells are solved only until the first unreachable one; the points
+        of cells not examined then are reported unreachable (use it for an all-or-nothing test).
+        """
         pts = np.asarray(points_cm, dtype=np.float64)[:, :2]
-        on = self.paper.contains(pts)
         out = np.zeros(len(pts), dtype=bool)
+        on = self.paper.contains(pts)
+        if stop_early and not on.all():
+            return out
         i = np.clip(np.searchsorted(self.xs, pts[:, 0], side="right") - 1, 0, self.nx - 1)
         j = np.clip(np.searchsorted(self.ys, pts[:, 1], side="right") - 1, 0, self.ny - 1)
-        cells = {}
-        for k in np.flatnonzero(on):
-            cell = (int(i[k]), int(j[k]))
-            if cell not in cells:
-                a, b = cell
-                cells[cell] = all(self.node(a + da, b + db) for da in (0, 1) for db in (0, 1))
-            out[k] = cells[cell]
+        cells, which = np.unique(np.column_stack([i, j])[on], axis=0, return_inverse=True)
+        ok = np.zeros(len(cells), dtype=bool)
+        for c, (a, b) in enumerate(cells.tolist()):
+            ok[c] = all(self.node(a + da, b + db) for da in (0, 1) for db in (0, 1))
+            if stop_early and not ok[c]:
+                return out
+        out[on] = ok[which.reshape(-1)]
         return out
 
     def region_mask(self) -> NDArray[np.bool_]:
@@ -298,7 +306,7 @@ def check_workspace(
         return
 
     def fits(s: float) -> bool:
-        return bool(reach.reachable(place_points(points_cm, anchor, s, target)).all())
+        return bool(reach.reachable(place_points(points_cm, anchor, s, target), True).all())
 
     lo, hi = 0.0, scale
     for _ in range(14):
@@ -313,13 +321,13 @@ def check_workspace(
             f"word {text!r} cannot be written by {robot} at paper.word_centre_cm="
             f"[{target[0]:g},{target[1]:g}]: that point is {where}; move the word"
         )
-    factor = math.floor(lo / scale * 100) / 100 * scale
+    factor = math.floor(lo * 1000) / 1000
     raise UsageError(
         f"word {text!r} is {width:.1f} cm wide and {height:.1f} cm tall at scale={scale:g}, "
         f"and ({bad[0]:.1f}, {bad[1]:.1f}) cm on the paper is {where}; at most "
         f"{width * lo / scale:.1f} cm wide fits {robot}'s workspace on the "
         f"{reach.paper.size_cm[0]:g} x {reach.paper.size_cm[1]:g} cm paper: set "
-        f"scale={factor:.2f} or smaller"
+        f"scale={factor:g} or smaller"
     )
 
 
