@@ -110,7 +110,7 @@ def test_null_space_ik_alone_misses_by_millimetres_and_the_refinement_fixes_it()
         refined = ik.solve(target)[1]
     from dataclasses import replace
 
-    with IKSolver(robot, replace(settings.ik, refine=False)) as ik:
+    with IKSolver(robot, replace(settings.ik, method="null_space")) as ik:
         plain = ik.solve(target)[1]
     assert refined < 1e-6 < 1e-4 < plain
 

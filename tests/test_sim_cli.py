@@ -4,6 +4,7 @@ bad input gets one line, exit code 2, and nothing is written."""
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -27,11 +28,11 @@ OUTPUTS = {
 }
 
 
-def simulate_cli(*args: str):
+def simulate_cli(*args: str, env: dict | None = None):
     """``prg-simulate ARGS`` (``python -m prg.simulate`` until the console script is installed)."""
     if (BIN / "prg-simulate").exists():
-        return run_cli("prg-simulate", "progress=false", *args)
-    return run_cli("python", "-m", "prg.simulate", "progress=false", *args)
+        return run_cli("prg-simulate", "progress=false", *args, env=env)
+    return run_cli("python", "-m", "prg.simulate", "progress=false", *args, env=env)
 
 
 @pytest.fixture(scope="module")
@@ -77,16 +78,21 @@ def test_text_runs_prg_write_first_with_its_options(tmp_path, untrained_muse_che
     result = simulate_cli(
         "text=a",
         f"ckpt={untrained_muse_checkpoint}",
-        "generate.speed_cm_s=6",
+        "generate.speed_cm_s=10",
         "layout.letter_height=2.0",
         f"out_dir={out}",
         f"paths.root_dir={tmp_path}",
         "mlflow=false",
+        "record=false",
     )
     assert result.returncode == 0, result.stderr[-2000:]
-    assert {"word.json", "word.png", "dmp_rollout.csv", "word.rrd"} <= {
-        p.name for p in (out / "word").iterdir()
+    assert {p.name for p in (out / "word").iterdir()} == {
+        "word.json",
+        "word.png",
+        "word.svg",
+        "dmp_rollout.csv",
     }
+    assert OUTPUTS - {p.name for p in out.iterdir()} == {"sim.rrd"}  # record=false
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["text"] == "a"
     assert metrics["word_height_cm"] <= 2.0 + 1e-6
@@ -97,23 +103,15 @@ def test_text_runs_prg_write_first_with_its_options(tmp_path, untrained_muse_che
     ("args", "message"),
     [
         (["word=/nonexistent/word.json"], "no such word trajectory file"),
-        (["word={bad}"], "not valid JSON"),
         (["word={word}", "robot=kuka"], "robot"),
         (["word={word}", "scale=40", "workspace_step_cm=4"], r"at most [\d.]+ cm wide fits panda"),
-        ([], "nothing to write"),
-        (["word={word}", "text=ok"], "both give the word"),
-        (["word={word}", "control.steps_per_waypoint=0"], "steps_per_waypoint"),
     ],
-    ids=["missing", "not-json", "unknown-robot", "too-large", "no-word", "both", "bad-setting"],
+    ids=["missing", "unknown-robot", "too-large"],
 )
 def test_bad_input_gets_one_line_exit_2_and_nothing_written(tmp_path, word_json, args, message):
-    import re
-
-    bad = tmp_path / "bad.json"
-    bad.write_text("{not json")
     out = tmp_path / "out"
     result = simulate_cli(
-        *[a.format(word=word_json, bad=bad) for a in args],
+        *[a.format(word=word_json) for a in args],
         f"out_dir={out}",
         f"paths.root_dir={tmp_path}",
         "mlflow=false",
@@ -122,4 +120,42 @@ def test_bad_input_gets_one_line_exit_2_and_nothing_written(tmp_path, word_json,
     lines = [line for line in result.stderr.splitlines() if line.startswith("prg-simulate")]
     assert len(lines) == 1 and "Traceback" not in result.stderr
     assert re.search(message, lines[0]), lines[0]
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["word={bad}"], "not valid JSON"),
+        ([], "nothing to write"),
+        (["word={word}", "text=ok"], "both give the word"),
+        (["word={word}", "control.steps_per_waypoint=0"], "steps_per_waypoint"),
+        (["word={word}", "ik.method=fast"], "ik.method"),
+        (["word={word}", "gui=true"], "needs a display"),
+    ],
+    ids=["not-json", "no-word", "both", "bad-setting", "bad-ik-method", "gui-without-display"],
+)
+def test_the_task_refuses_bad_input_before_writing_anything(
+    tmp_path, word_json, monkeypatch, args, message
+):
+    from prg.cli import compose_config
+    from prg.errors import UsageError
+    from prg.simulate import simulate
+
+    monkeypatch.setenv("DISPLAY", "")
+    bad = tmp_path / "bad.json"
+    bad.write_text("{not json")
+    out = tmp_path / "out"
+    cfg = compose_config(
+        "simulate",
+        [
+            *[a.format(word=word_json, bad=bad) for a in args],
+            f"out_dir={out}",
+            f"paths.root_dir={tmp_path}",
+            "mlflow=false",
+            "progress=false",
+        ],
+    )
+    with pytest.raises(UsageError, match=message):
+        simulate(cfg)
     assert not out.exists()

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import logging
 import math
+import os
+import sys
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,12 +33,14 @@ from prg.sim.robots import LoadedRobot, RobotConfig, pybullet_data_path
 log = logging.getLogger(__name__)
 
 __all__ = [
+    "IK_METHODS",
     "PEN_DOWN",
     "Camera",
     "IKSettings",
     "IKSolver",
     "Scene",
     "UnreachableError",
+    "pen_down",
     "pybullet",
 ]
 
@@ -44,6 +48,13 @@ PEN_DOWN = (1.0, 0.0, 0.0, 0.0)
 """Flange orientation (x, y, z, w) with its z axis pointing straight down: a rotation of pi about
 x. The pen, along the flange's z axis, is then vertical, tip down."""
 
+
+def pen_down(yaw: float) -> tuple[float, float, float, float]:
+    """:data:`PEN_DOWN` turned by ``yaw`` (rad) about the vertical, (x, y, z, w)."""
+    return (math.cos(yaw / 2), math.sin(yaw / 2), 0.0, 0.0)
+
+
+IK_METHODS = ("refined", "null_space", "plain")
 TABLE_TOP_Z = 0.625  # pybullet_data/table/table.urdf: a 5 cm top centred at z = 0.6
 
 
@@ -79,8 +90,11 @@ class IKSettings:
     tolerance_mm : float
         Largest pen-tip error of a solution (mm); above it, or outside the joint limits, the
         target is unreachable.
-    refine : bool
-        False: the null-space solve alone (the reference the benchmark compares with).
+    method : str
+        ``"refined"``: the null-space solve, then the plain solve seeded from it (default);
+        ``"null_space"``: the null-space solve alone; ``"plain"``: the plain solve alone, seeded
+        with the previous solution (no rest pose, no limits). The last two are the references
+        ``benchmarks/bench_simulate.py`` compares with.
     """
 
     null_space_iterations: int = 20
@@ -88,9 +102,11 @@ class IKSettings:
     cold_iterations: int = 100
     residual: float = 1e-7
     tolerance_mm: float = 0.5
-    refine: bool = True
+    method: str = "refined"
 
     def __post_init__(self) -> None:
+        if self.method not in IK_METHODS:
+            raise UsageError(f"ik.method {self.method!r}: choose {', '.join(IK_METHODS)}")
         for name in ("null_space_iterations", "refine_iterations", "cold_iterations"):
             value = getattr(self, name)
             if isinstance(value, bool) or int(value) != value or value < 1:
@@ -168,6 +184,12 @@ class IKSolver:
     ----------
     config : RobotConfig
     settings : IKSettings
+
+    Attributes
+    ----------
+    orientation : tuple of float
+        The flange orientation every solve asks for (x, y, z, w): the pen vertical, tip down,
+        turned about the pen as in the rest pose.
     """
 
     def __init__(self, config: RobotConfig, settings: IKSettings | None = None) -> None:
@@ -185,7 +207,13 @@ class IKSolver:
         self._ranges = (r.upper - r.lower).tolist()
         self._rest = r.rest_movable.tolist()
         self._offset = np.asarray(config.pen_offset, dtype=np.float64)
-        self._flange_offset = _rotate(PEN_DOWN, self._offset)
+        # hold the pen vertical with the flange turned about the pen as in the rest pose, so
+        # the wrist does not spin to reach an arbitrary heading
+        self.set_state(r.rest_movable)
+        _, rest_orientation = self._flange()
+        x_axis = _rotate(rest_orientation, [1.0, 0.0, 0.0])
+        self.orientation = pen_down(math.atan2(x_axis[1], x_axis[0]))
+        self._flange_offset = _rotate(self.orientation, self._offset)
 
     def close(self) -> None:
         """Disconnect the solver's client (idempotent)."""
@@ -213,14 +241,19 @@ class IKSolver:
         self.set_state(q_movable)
         return self.current_tip()
 
-    def current_tip(self) -> NDArray[np.float64]:
+    def _flange(self) -> tuple[NDArray[np.float64], tuple[float, float, float, float]]:
         state = self.p.getLinkState(
             self.robot.body,
             self.robot.flange,
             computeForwardKinematics=True,
             physicsClientId=self.cid,
         )
-        return np.asarray(state[4]) + _rotate(state[5], self._offset)
+        return np.asarray(state[4]), state[5]
+
+    def current_tip(self) -> NDArray[np.float64]:
+        """Pen-tip position (world, m) in the current posture of the kinematic copy."""
+        position, orientation = self._flange()
+        return position + _rotate(orientation, self._offset)
 
     def solve(
         self, tip: ArrayLike, seed: ArrayLike | None = None
@@ -248,26 +281,28 @@ class IKSolver:
         self.set_state(self._rest if seed is None else seed)
         null_space = s.cold_iterations if seed is None else s.null_space_iterations
         refine = s.cold_iterations if seed is None else s.refine_iterations
-        q = p.calculateInverseKinematics(
-            r.body,
-            r.flange,
-            flange,
-            PEN_DOWN,
-            lowerLimits=self._lower,
-            upperLimits=self._upper,
-            jointRanges=self._ranges,
-            restPoses=self._rest,
-            maxNumIterations=null_space,
-            residualThreshold=s.residual,
-            physicsClientId=self.cid,
-        )
-        if s.refine:
+        q = self._rest if seed is None else seed
+        if s.method != "plain":
+            q = p.calculateInverseKinematics(
+                r.body,
+                r.flange,
+                flange,
+                self.orientation,
+                lowerLimits=self._lower,
+                upperLimits=self._upper,
+                jointRanges=self._ranges,
+                restPoses=self._rest,
+                maxNumIterations=null_space,
+                residualThreshold=s.residual,
+                physicsClientId=self.cid,
+            )
+        if s.method != "null_space":
             self.set_state(q)
             q = p.calculateInverseKinematics(
                 r.body,
                 r.flange,
                 flange,
-                PEN_DOWN,
+                self.orientation,
                 maxNumIterations=refine,
                 residualThreshold=s.residual,
                 physicsClientId=self.cid,
@@ -395,6 +430,7 @@ class Scene:
     def __init__(
         self, robot: RobotConfig, paper: Paper, gui: bool = False, time_step: float = 1 / 240
     ) -> None:
+        self.check_gui(gui)
         self.p = p = pybullet()
         self.paper = paper
         self.time_step = float(time_step)
@@ -422,6 +458,13 @@ class Scene:
         except BaseException:
             self.close()
             raise
+
+    @staticmethod
+    def check_gui(gui: bool) -> None:
+        """Refuse ``gui=True`` without a display: PyBullet's GUI would end the whole process
+        ("cannot connect to X server") instead of raising."""
+        if gui and sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+            raise UsageError("gui=true needs a display (DISPLAY is not set): use gui=false")
 
     # ------------------------------------------------------------------ building
     def _add_paper(self) -> int:

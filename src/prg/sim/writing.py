@@ -435,6 +435,9 @@ class SimResult:
             "ink_points": int(self.contact.sum()),
             "ik_error_mean_mm": float(self.ik_error_m.mean() * 1000.0),
             "ik_error_max_mm": float(self.ik_error_m.max() * 1000.0),
+            "rest_distance_max_rad": float(
+                np.abs(self.q - np.asarray(self.robot.rest_pose)).max(axis=1).max()
+            ),
             "writing_s": float(np.ptp(self.plan.t[writing])) if writing.any() else 0.0,
             "sim_s": self.sim_s,
             "wall_s": self.wall_s,
@@ -496,6 +499,7 @@ def simulate_word(
         If the word does not fit the workspace (the size that fits is given) or an IK target is
         unreachable (the point is named); nothing has been simulated then.
     """
+    Scene.check_gui(gui)
     s = settings or SimSettings()
     ctl = s.control
     dt = ctl.waypoint_dt
