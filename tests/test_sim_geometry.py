@@ -182,3 +182,27 @@ def test_plan_refuses_a_word_without_pen_down_samples():
         plan_motion(
             np.zeros((3, 2)), np.arange(3.0), np.zeros(3, bool), np.zeros(3), MotionSettings(), 0.1
         )
+
+
+def test_word_samples_follow_the_dmp_at_its_tempo():
+    from prg.sim import font_word, word_samples
+
+    word = font_word("ab")
+    samples, t, down = word_samples(word, dt=1 / 60)
+    assert t[-1] == pytest.approx(word.dmp["tau"]) and down.all()
+    assert np.diff(t).max() == pytest.approx(1 / 60, rel=0.05)
+    assert distance_to_polylines(samples, [word.points]).max() < 0.01  # within 0.1 mm
+    slow, t2, _ = word_samples(word, dt=2 / 60, tempo=2.0)
+    assert t2[-1] == pytest.approx(2 * word.dmp["tau"])
+    assert_allclose(slow, samples, atol=1e-9)  # same samples, twice the time
+
+
+def test_a_word_without_a_dmp_is_followed_at_its_speed():
+    from dataclasses import replace
+
+    from prg.sim import font_word, word_samples
+
+    word = replace(font_word("ab"), dmp=None, duration_s=None)
+    samples, t, _ = word_samples(word, dt=1 / 100)
+    assert t[-1] == pytest.approx(word.path_length / word.speed_cm_s)
+    assert_allclose(samples[[0, -1]], word.points[[0, -1]], atol=1e-9)

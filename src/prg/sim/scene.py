@@ -18,6 +18,7 @@ import math
 import os
 import sys
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -318,7 +319,11 @@ class IKSolver:
         return q, error
 
     def solve_path(
-        self, tips: ArrayLike, seed: ArrayLike | None = None, describe=None
+        self,
+        tips: ArrayLike,
+        seed: ArrayLike | None = None,
+        describe: Callable[[int], str] | None = None,
+        progress: Callable[[int], object] | None = None,
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Solve a sequence of tip targets, each seeded with the previous solution.
 
@@ -330,6 +335,8 @@ class IKSolver:
             Posture before the first target (default: a cold start from the rest pose).
         describe : callable, optional
             ``describe(i) -> str`` naming target ``i`` for the error message.
+        progress : callable, optional
+            Called with the number of targets solved since its last call (every 100).
 
         Returns
         -------
@@ -357,6 +364,8 @@ class IKSolver:
                     "(scale=...) or move it (paper.word_centre_cm=[x,y])"
                 )
             out[i], errors[i] = q, err
+            if progress is not None and ((i + 1) % 100 == 0 or i + 1 == len(targets)):
+                progress((i % 100) + 1)
         return out, errors
 
 

@@ -454,7 +454,7 @@ class SimResult:
 # ----------------------------------------------------------------------------- the run
 
 
-def _describe(plan: MotionPlan, centre: NDArray[np.float64]):
+def _describe(plan: MotionPlan):
     def describe(i: int) -> str:
         x, y, h = plan.tip[i]
         return (
@@ -485,7 +485,7 @@ def simulate_word(
     gui : bool
         PyBullet GUI instead of DIRECT (needs a display).
     progress : bool
-        Show a progress bar over the physics steps.
+        Show progress bars over the IK waypoints and the physics steps.
     render : bool
         Take the TinyRenderer picture of the page at the end.
 
@@ -515,7 +515,16 @@ def simulate_word(
         check_workspace(samples, anchor, centre, s.scale, reach, robot.name, word.text)
         home = s.paper.to_paper(ik.tip(ik.robot.rest_movable))[0]
         plan = plan_motion(placed, t_word, down, home, s.motion, dt)
-        q_plan, ik_err = ik.solve_path(s.paper.to_world(plan.tip), describe=_describe(plan, centre))
+        bar = _progress(len(plan.t), f"{robot.name}: inverse kinematics", progress, "waypoint")
+        try:
+            q_plan, ik_err = ik.solve_path(
+                s.paper.to_world(plan.tip),
+                describe=_describe(plan),
+                progress=None if bar is None else bar.update,
+            )
+        finally:
+            if bar is not None:
+                bar.close()
         log.info(
             "IK: %d waypoints (%d workspace nodes) in %.2f s, tip error mean %.4f max %.4f mm",
             len(plan.t),
@@ -542,7 +551,7 @@ def simulate_word(
         q = np.empty((n_steps, len(arm)))
         tip = np.empty((n_steps, 3))
         orn = np.empty((n_steps, 4))
-        bar = _progress(n_steps, f"{robot.name} writes {word.text!r}", progress)
+        bar = _progress(n_steps, f"{robot.name} writes {word.text!r}", progress, "step")
         start = time.perf_counter()
         for i in range(n_steps):
             scene.command(targets[i], velocities[i], ctl.position_gain, ctl.velocity_gain)
@@ -610,9 +619,9 @@ def simulate_word(
     return result
 
 
-def _progress(total: int, description: str, enabled: bool):
+def _progress(total: int, description: str, enabled: bool, unit: str):
     if not enabled:
         return None
     from tqdm.auto import tqdm
 
-    return tqdm(total=total, desc=description, unit="step", leave=False)
+    return tqdm(total=total, desc=description, unit=unit, leave=False)
