@@ -180,7 +180,7 @@ def word_samples(
     else:
         from prg.pipeline.generate import rest_to_rest_samples
 
-        samples, tau = rest_to_rest_samples(word.points, word.speed_cm_s, 0.3, 1.0 / dt)
+        samples, tau = rest_to_rest_samples(word.points, word.speed_cm_s, 0.3, 1 / (dt * tempo))
         tau *= tempo
     t = np.linspace(0.0, tau, len(samples))
     down = pen_down_samples(word.points, word.segment, word.segment_kinds, samples)
@@ -262,13 +262,6 @@ class ReachMap:
                 return out
         out[on] = ok[which.reshape(-1)]
         return out
-
-    def region_mask(self) -> NDArray[np.bool_]:
-        """The solved nodes as a (ny + 1, nx + 1) array (unsolved nodes: False)."""
-        mask = np.zeros((self.ny + 1, self.nx + 1), dtype=bool)
-        for (i, j), ok in self._nodes.items():
-            mask[j, i] = ok
-        return mask
 
 
 def check_workspace(
