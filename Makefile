@@ -37,13 +37,14 @@ system: ## Install the Debian packages the tests and the demo use, if missing (r
 
 setup: system $(STAMP) ## Create .venv, install system packages, torch (CPU) and the project (idempotent)
 
-demo: setup ## Run the whole pipeline (dvc repro): dataset, four models, evaluation, Table II
+demo: setup ## Run the whole pipeline (dvc repro): dataset, models, evaluation, Table II, robot
 	dvc repro
 	@echo
 	@echo "Dataset:  data/prepared/synthetic/ (train/val/test.npz, manifest.json, figures/)"
 	@echo "Models:   models/<family>/model.ckpt and metrics.json  (dvc metrics show)"
 	@echo "Reports:  reports/table1.md, reports/coherence.md, reports/robustness.md, reports/figures/"
 	@echo "Words:    reports/dictaphone/table2.png, table2.md; <word>/<sound|image>/word.rrd (rerun FILE)"
+	@echo "Robot:    reports/simulate/ink.png, page.png, metrics.json; rerun reports/simulate/sim.rrd"
 	@echo "Runs:     mlflow ui --backend-store-uri sqlite:///mlruns.db   (then http://127.0.0.1:5000)"
 
 test: setup ## Run the default test suite (fast; no `slow` tests)
@@ -67,6 +68,7 @@ bench: setup ## Run the benchmarks (tables printed, JSON under benchmarks/result
 	$(BIN)/python benchmarks/bench_dmp.py
 	$(BIN)/python benchmarks/bench_write.py --speech
 	$(BIN)/python benchmarks/bench_speech.py
+	$(BIN)/python benchmarks/bench_simulate.py
 
 clean: ## Remove caches (keeps .venv, data and runs)
 	rm -rf .pytest_cache .ruff_cache .hypothesis
