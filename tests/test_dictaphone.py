@@ -6,6 +6,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from prg.cli import compose_config
+from prg.dictaphone import dictaphone
+from prg.errors import UsageError
 from prg.pipeline.speech import load_audio
 from prg.pipeline.word import WordTrajectory
 from prg.recording import read_entities
@@ -81,17 +84,15 @@ def test_table_and_figure(table):
         (["words=[cat]", "channels=[sound]", "voice=klingon-xx"], "espeak-ng could not speak"),
     ],
 )
-def test_bad_input_gets_one_line_and_exit_2(tmp_path, untrained_muse_checkpoint, args, expected):
+def test_bad_input_is_refused_in_one_line_and_writes_nothing(
+    tmp_path, untrained_muse_checkpoint, args, expected
+):
     out = tmp_path / "out"
-    result = run_cli(
-        "prg-dictaphone",
-        *args,
-        f"ckpt={untrained_muse_checkpoint}",
-        f"paths.root_dir={tmp_path}",
-        f"out_dir={out}",
-        "mlflow=false",
+    cfg = compose_config(
+        "dictaphone",
+        [*args, f"ckpt={untrained_muse_checkpoint}", f"out_dir={out}", "mlflow=false"],
     )
-    lines = result.stderr.strip().splitlines()
-    assert result.returncode == 2, result.stderr[-2000:]
-    assert len(lines) == 1 and expected in lines[0], lines
+    with pytest.raises(UsageError) as refused:
+        dictaphone(cfg)
+    assert expected in str(refused.value) and "\n" not in str(refused.value)
     assert not out.exists()

@@ -10,9 +10,12 @@ import numpy as np
 import pytest
 from mlflow import MlflowClient
 
+from prg.cli import compose_config
+from prg.errors import UsageError
 from prg.pipeline.word import WordTrajectory
 from prg.recording import read_entities, read_times
 from prg.tracking import sqlite_uri
+from prg.write import write
 from tests.conftest import run_cli
 
 
@@ -167,7 +170,7 @@ BAD = [
 
 
 @pytest.mark.parametrize("args, expected", BAD, ids=[" ".join(a) for a, _ in BAD])
-def test_bad_input_gets_one_line_and_exit_2(tmp_path, checkpoint, args, expected):
+def test_bad_input_is_refused_in_one_line_and_writes_nothing(tmp_path, checkpoint, args, expected):
     out = tmp_path / "out"
     silence = np.zeros(16000, dtype=np.int16)
     with wave.open(str(tmp_path / "silence.wav"), "wb") as f:
@@ -176,7 +179,23 @@ def test_bad_input_gets_one_line_and_exit_2(tmp_path, checkpoint, args, expected
     args = [a.format(tmp=tmp_path) for a in args]
     if not any(a.startswith("ckpt=") for a in args):
         args.append(f"ckpt={checkpoint}")
-    result = run_cli("prg-write", *args, f"out_dir={out}", f"paths.root_dir={tmp_path}")
+    cfg = compose_config("write", [*args, f"out_dir={out}", f"paths.root_dir={tmp_path}"])
+    with pytest.raises(UsageError) as refused:
+        write(cfg)
+    assert expected in str(refused.value) and "\n" not in str(refused.value)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "args, expected",
+    [
+        (["text=h@llo"], "unsupported characters '@'"),  # from the task
+        (["text=héllo, wörld!"], "needs Hydra quotes"),  # from Hydra's override grammar
+    ],
+)
+def test_the_command_prints_one_line_and_exits_2(tmp_path, checkpoint, args, expected):
+    out = tmp_path / "out"
+    result = run_cli("prg-write", *args, f"ckpt={checkpoint}", f"out_dir={out}")
     lines = result.stderr.strip().splitlines()
     assert result.returncode == 2, result.stderr[-2000:]
     assert len(lines) == 1 and lines[0].startswith("prg-write: error:"), lines
@@ -186,14 +205,17 @@ def test_bad_input_gets_one_line_and_exit_2(tmp_path, checkpoint, args, expected
 
 def test_unknown_characters_are_skipped_on_request(tmp_path, checkpoint):
     out = tmp_path / "out"
-    result = run_cli(
-        "prg-write",
-        'text="héllo, wörld!"',
-        "on_unknown=skip",
-        f"ckpt={checkpoint}",
-        f"out_dir={out}",
-        f"paths.root_dir={tmp_path}",
-        "mlflow=false",
+    cfg = compose_config(
+        "write",
+        [
+            'text="héllo, wörld!"',
+            "on_unknown=skip",
+            f"ckpt={checkpoint}",
+            f"out_dir={out}",
+            "mlflow=false",
+            "record=false",
+        ],
     )
-    assert result.returncode == 0, result.stderr[-2000:]
+    word, _ = write(cfg)
+    assert word.text == "hllo wrld"
     assert WordTrajectory.from_json(out / "word.json").text == "hllo wrld"
