@@ -1,0 +1,693 @@
+"""Study designs: the YAML description of a study and its counterbalanced trial lists.
+
+A study is one YAML file under ``conf/study/`` (``turing.yaml``, ``readability.yaml``), read by
+:func:`load_study` into a :class:`StudyConfig`. Everything a participant sees is decided here,
+offline and seeded, as one :class:`Row` per participant (the page picks its row, see
+:func:`assign_row`):
+
+* **Study 1, Turing-like** (``kind: turing``, :func:`turing_rows`): per word one robot sample and
+  ``foils`` human samples; word order shuffled per participant; the robot's position (0 to
+  ``foils``, left to right; the page numbers them from 1) taken from a Latin square (:func:`robot_positions`): every position
+  equally often within each participant (when the number of words is a multiple of the number of
+  options) and, for every word, equally often across participants (when the number of participants
+  is); the human foils are sampled per trial from the word's writers.
+* **Study 2, readability** (``kind: readability``, :func:`readability_rows`): two lists A/B that
+  swap which half of the words is shown human- and which robot-written (:func:`split_lists`),
+  alternated over participants, so that each word x writer is seen equally often; the human
+  writer of each word rotates over participants; word order shuffled per participant.
+
+Attention checks (instructed responses) are inserted after a given trial (:func:`with_checks`);
+they are flagged in the responses, never deleted.
+
+All functions below the config loader are pure: same arguments, same result.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from prg.errors import UsageError
+
+KINDS = ("turing", "readability")
+ROBOT = "robot"  # the writer id of robot samples
+WORD_RE = re.compile(r"^[A-Za-z]+$")
+NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]*$")
+ON_LIFT = ("restart", "flag")
+
+DEFAULT_CONSENT = (
+    "This study is about handwriting. It takes about 5 minutes. Your answers are anonymous "
+    "and are only used for research; you may stop at any time by closing the page."
+)
+DEFAULT_INSTRUCTIONS = {
+    "turing": (
+        "For each word you will see five handwritten samples of it. Four were written by people "
+        "and one by a robot. Click the sample you think the robot wrote, then say how confident "
+        "you are."
+    ),
+    "readability": (
+        "For each trial you will see one handwritten word. Type the word you read and press "
+        "Enter (or click Next)."
+    ),
+}
+CONFIDENCE_LABELS = ("very low", "low", "neutral", "high", "very high")
+PROLIFIC_URL = "https://app.prolific.com/submissions/complete?cc={code}"
+
+
+# ---------------------------------------------------------------------------- configuration
+@dataclass(frozen=True)
+class AttentionCheck:
+    """An instructed-response trial shown after ``after_trial`` word trials.
+
+    Attributes
+    ----------
+    after_trial : int
+        Number of word trials before it (0: first of all).
+    instruction : str
+        What the participant is told to do instead of the usual task.
+    expect : dict
+        The passing response: ``{"chosen_index": k}`` and optionally ``"confidence": c``
+        (study 1, 0-based; the YAML gives ``choose_sample: k + 1``, the number shown on screen)
+        or ``{"typed_text": "word"}`` (study 2).
+    word : str or None
+        Whose screen it repeats (None: the word trial just before it, or the first).
+    """
+
+    after_trial: int
+    instruction: str
+    expect: dict
+    word: str | None = None
+
+
+@dataclass(frozen=True)
+class StudyConfig:
+    """A study as described by its YAML file (see ``conf/study/turing.yaml`` for every key).
+
+    Attributes
+    ----------
+    name : str
+        Folder name: the bundle is built into ``studies/<name>/build/``.
+    kind : {"turing", "readability"}
+    words : tuple of str
+        The words written by the robot and by every human writer (letters only).
+    human_writers : int
+        Human writers per word (the paper's group 1: 10).
+    foils : int
+        Study 1: human samples shown beside the robot's (4); the trial has ``foils + 1`` options.
+    participants : int
+        Counterbalanced rows generated (the paper: 50 for study 1, 30 for study 2).
+    lists : tuple of str
+        Study 2: the two list names (A, B).
+    seed : int
+    equivalence_margin : float
+        Fixed before data collection: study 1 the margin around chance, study 2 the margin on
+        the human - robot difference in reading success.
+    alpha : float
+    attention_checks : tuple of AttentionCheck
+    robot : dict
+        ``family``, ``ckpt``, ``dir`` (ready word trajectories instead of writing them) and
+        ``write_overrides`` (a list of ``prg-write`` overrides).
+    render : dict
+        :class:`studies.stimuli.RenderStyle` fields.
+    human : dict
+        ``dirs``: folders of human samples; ``accept_lifted``: use samples written with a pen
+        lift (default False).
+    page : dict
+        ``title``, ``consent``, ``instructions``, ``confidence_labels``.
+    completion : dict
+        ``code``, ``url`` (``{code}`` is replaced), ``redirect_delay_ms``.
+    save : dict
+        ``download`` (offer the CSV at the end) and ``post_url`` (POST it there; null: don't).
+    capture : dict
+        The capture page: ``on_lift`` (restart | flag), ``post_url``, ``canvas_width``,
+        ``canvas_height`` (CSS pixels).
+    source : str
+        The YAML file it was read from (or ``"<dict>"``).
+    """
+
+    name: str
+    kind: str
+    words: tuple[str, ...]
+    human_writers: int = 10
+    foils: int = 4
+    participants: int = 50
+    lists: tuple[str, ...] = ("A", "B")
+    seed: int = 0
+    equivalence_margin: float = 0.05
+    alpha: float = 0.05
+    attention_checks: tuple[AttentionCheck, ...] = ()
+    robot: dict = field(default_factory=dict)
+    render: dict = field(default_factory=dict)
+    human: dict = field(default_factory=dict)
+    page: dict = field(default_factory=dict)
+    completion: dict = field(default_factory=dict)
+    save: dict = field(default_factory=dict)
+    capture: dict = field(default_factory=dict)
+    source: str = "<dict>"
+
+    @property
+    def n_options(self) -> int:
+        """Samples per study-1 trial (robot + foils)."""
+        return self.foils + 1
+
+    @property
+    def chance(self) -> float:
+        """Study 1: the rate of picking the robot by guessing, ``1 / n_options``."""
+        return 1.0 / self.n_options
+
+    def min_writers(self) -> int:
+        """Human writers each word needs before the study can run."""
+        return self.human_writers
+
+
+_SECTIONS = {
+    "robot": {"family": "muse", "ckpt": None, "dir": None, "write_overrides": []},
+    "render": {},
+    "human": {"dirs": [], "accept_lifted": False},
+    "page": {},
+    "completion": {"code": None, "url": PROLIFIC_URL, "redirect_delay_ms": 3000},
+    "save": {"download": True, "post_url": None},
+    "capture": {"on_lift": "restart", "post_url": None, "canvas_width": 900, "canvas_height": 300},
+}
+_TOP = {
+    "name",
+    "kind",
+    "words",
+    "human_writers",
+    "foils",
+    "participants",
+    "lists",
+    "seed",
+    "equivalence_margin",
+    "alpha",
+    "attention_checks",
+    "analysis",
+    *_SECTIONS,
+}
+
+
+def _int(doc: Mapping, key: str, default: int | None, minimum: int) -> int:
+    value = doc.get(key, default)
+    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+        raise UsageError(f"{key} must be an integer >= {minimum}, got {value!r}")
+    return value
+
+
+def _float(doc: Mapping, key: str, default: float, low: float, high: float) -> float:
+    value = doc.get(key, default)
+    if isinstance(value, bool) or not isinstance(value, int | float) or not low < value < high:
+        raise UsageError(f"{key} must be a number in ({low}, {high}), got {value!r}")
+    return float(value)
+
+
+def study_from_dict(doc: Mapping[str, Any], source: str = "<dict>") -> StudyConfig:
+    """Validate a parsed study document; raises :class:`UsageError` naming the bad key."""
+    if not isinstance(doc, Mapping):
+        raise UsageError("a study file must hold a mapping of keys (name, kind, words, ...)")
+    unknown = sorted(set(doc) - _TOP)
+    if unknown:
+        raise UsageError(f"unknown key {unknown[0]!r}: accepted are {', '.join(sorted(_TOP))}")
+    name = doc.get("name")
+    if not isinstance(name, str) or not NAME_RE.match(name):
+        raise UsageError(f"name must be letters, digits, - or _ (a folder name), got {name!r}")
+    kind = doc.get("kind")
+    if kind not in KINDS:
+        raise UsageError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
+    words = doc.get("words")
+    if not isinstance(words, list) or not words:
+        raise UsageError("words must be a non-empty list, e.g. words: [bell, cat, jump]")
+    for word in words:
+        if not isinstance(word, str) or not WORD_RE.match(word):
+            raise UsageError(f"words: {word!r} is not a word of letters a-z/A-Z")
+    if len(set(words)) != len(words):
+        dup = next(w for w in words if words.count(w) > 1)
+        raise UsageError(f"words: {dup!r} is listed twice")
+    foils = _int(doc, "foils", 4, 1)
+    human_writers = _int(doc, "human_writers", 10, 1)
+    if kind == "turing" and human_writers < foils:
+        raise UsageError(
+            f"human_writers ({human_writers}) must be at least foils ({foils}): each trial shows "
+            "foils different human writers"
+        )
+    lists = doc.get("lists", ["A", "B"])
+    if (
+        not isinstance(lists, list)
+        or len(lists) != 2
+        or not all(isinstance(x, str) and NAME_RE.match(x) for x in lists)
+        or lists[0] == lists[1]
+    ):
+        raise UsageError(f"lists must be two different names, e.g. [A, B], got {lists!r}")
+    if kind == "readability" and len(words) % 2:
+        raise UsageError(
+            f"a readability study needs an even number of words (half human, half robot per "
+            f"list), got {len(words)}"
+        )
+    sections = {}
+    for key, defaults in _SECTIONS.items():
+        value = doc.get(key) or {}
+        if not isinstance(value, Mapping):
+            raise UsageError(f"{key} must be a mapping of settings, got {value!r}")
+        sections[key] = {**defaults, **value}
+    if not isinstance(doc.get("analysis") or {}, Mapping):
+        raise UsageError("analysis must be a mapping of settings (read by prg-study analyze)")
+    if sections["capture"]["on_lift"] not in ON_LIFT:
+        raise UsageError(
+            f"capture.on_lift must be one of {', '.join(ON_LIFT)}, "
+            f"got {sections['capture']['on_lift']!r}"
+        )
+    if not isinstance(sections["robot"]["write_overrides"], list):
+        raise UsageError("robot.write_overrides must be a list of prg-write overrides")
+    dirs = sections["human"]["dirs"]
+    if not isinstance(dirs, list) or not all(isinstance(d, str) and d for d in dirs):
+        raise UsageError(f"human.dirs must be a list of folders, got {dirs!r}")
+    code = sections["completion"]["code"]
+    if code is None:
+        sections["completion"]["code"] = default_completion_code(name, doc.get("seed", 0))
+    elif not isinstance(code, str) or not code.strip():
+        raise UsageError(f"completion.code must be a non-empty string, got {code!r}")
+    for key in ("post_url",):
+        for section in ("save", "capture"):
+            url = sections[section][key]
+            if url is not None and not (isinstance(url, str) and url.strip()):
+                raise UsageError(f"{section}.{key} must be a URL or null, got {url!r}")
+    config = StudyConfig(
+        name=name,
+        kind=kind,
+        words=tuple(words),
+        human_writers=human_writers,
+        foils=foils,
+        participants=_int(doc, "participants", 50, 1),
+        lists=tuple(lists),
+        seed=_int(doc, "seed", 0, 0),
+        equivalence_margin=_float(doc, "equivalence_margin", 0.05, 0.0, 1.0),
+        alpha=_float(doc, "alpha", 0.05, 0.0, 0.5),
+        robot=sections["robot"],
+        render=sections["render"],
+        human=sections["human"],
+        page=_page(sections["page"], kind, name),
+        completion=sections["completion"],
+        save=sections["save"],
+        capture=sections["capture"],
+        source=source,
+    )
+    checks = _checks(doc.get("attention_checks") or [], config)
+    return replace(config, attention_checks=checks)
+
+
+def _page(page: dict, kind: str, name: str) -> dict:
+    out = {
+        "title": page.get("title") or "Handwriting study",
+        "consent": page.get("consent") or DEFAULT_CONSENT,
+        "instructions": page.get("instructions") or DEFAULT_INSTRUCTIONS[kind],
+        "confidence_labels": list(page.get("confidence_labels") or CONFIDENCE_LABELS),
+    }
+    if len(out["confidence_labels"]) != 5:
+        raise UsageError("page.confidence_labels must name the 5 points of the scale")
+    return out
+
+
+def _checks(raw: Any, config: StudyConfig) -> tuple[AttentionCheck, ...]:
+    if not isinstance(raw, list):
+        raise UsageError("attention_checks must be a list of {after_trial, instruction, expect}")
+    checks = []
+    for i, item in enumerate(raw):
+        where = f"attention_checks[{i}]"
+        if not isinstance(item, Mapping):
+            raise UsageError(f"{where} must be a mapping with after_trial, instruction, expect")
+        extra = sorted(set(item) - {"after_trial", "instruction", "expect", "word"})
+        if extra:
+            raise UsageError(f"{where}: unknown key {extra[0]!r}")
+        after = item.get("after_trial")
+        if isinstance(after, bool) or not isinstance(after, int):
+            raise UsageError(f"{where}.after_trial must be an integer, got {after!r}")
+        if not 0 <= after <= len(config.words):
+            raise UsageError(
+                f"{where}.after_trial must be between 0 and {len(config.words)} (the number of "
+                f"words), got {after}"
+            )
+        instruction = item.get("instruction")
+        if not isinstance(instruction, str) or not instruction.strip():
+            raise UsageError(f"{where}.instruction must be a non-empty text")
+        expect = item.get("expect")
+        expect_raw = dict(expect) if isinstance(expect, Mapping) else {}
+        word = item.get("word")
+        if word is not None and word not in config.words:
+            raise UsageError(f"{where}.word {word!r} is not one of the study's words")
+        allowed = {"choose_sample", "confidence"} if config.kind == "turing" else {"typed_text"}
+        if set(expect_raw) - allowed:
+            extra = sorted(set(expect_raw) - allowed)[0]
+            raise UsageError(
+                f"{where}.expect: unknown key {extra!r}: accepted are {sorted(allowed)}"
+            )
+        if config.kind == "turing":
+            k = expect_raw.get("choose_sample")
+            if isinstance(k, bool) or not isinstance(k, int) or not 1 <= k <= config.n_options:
+                raise UsageError(
+                    f"{where}.expect must be {{choose_sample: K}}: the sample numbered K on "
+                    f"screen, K in 1..{config.n_options}"
+                )
+            expect = {"chosen_index": k - 1}
+            if "confidence" in expect_raw:
+                level = expect_raw["confidence"]
+                if isinstance(level, bool) or level not in (1, 2, 3, 4, 5):
+                    raise UsageError(f"{where}.expect.confidence must be 1-5, got {level!r}")
+                expect["confidence"] = level
+        else:
+            text = expect_raw.get("typed_text")
+            if not isinstance(text, str) or not normalise_answer(text):
+                raise UsageError(f"{where}.expect must be {{typed_text: WORD}}")
+            expect = {"typed_text": text}
+        checks.append(AttentionCheck(after, instruction.strip(), expect, word))
+    return tuple(checks)
+
+
+def parse_override(text: str) -> tuple[list[str], Any]:
+    """``"a.b=value"`` -> (["a", "b"], value parsed as YAML); raises :class:`UsageError`."""
+    key, sep, value = text.partition("=")
+    keys = key.strip().split(".")
+    if not sep or not all(k.strip() for k in keys):
+        raise UsageError(f"override {text!r} must look like key=value or section.key=value")
+    try:
+        parsed = yaml.safe_load(value) if value.strip() else None
+    except yaml.YAMLError:
+        raise UsageError(f"override {text!r}: the value is not valid YAML") from None
+    return [k.strip() for k in keys], parsed
+
+
+def apply_overrides(doc: dict, overrides: Sequence[str]) -> dict:
+    """A copy of ``doc`` with ``key=value`` overrides applied (nested keys with dots)."""
+    out = yaml.safe_load(yaml.safe_dump(doc))
+    for text in overrides:
+        keys, value = parse_override(text)
+        node = out
+        for key in keys[:-1]:
+            child = node.get(key)
+            if child is None:
+                child = node[key] = {}
+            if not isinstance(child, dict):
+                raise UsageError(f"override {text!r}: {key!r} is not a section")
+            node = child
+        node[keys[-1]] = value
+    return out
+
+
+def load_study(path: str | Path, overrides: Sequence[str] = ()) -> StudyConfig:
+    """Read and validate a study YAML file (plus ``key=value`` overrides).
+
+    Raises
+    ------
+    UsageError
+        One line naming the file and the bad key or value.
+    """
+    path = Path(path)
+    try:
+        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise UsageError(f"{path}: no such study file (e.g. conf/study/turing.yaml)") from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise UsageError(f"{path}: cannot read the study file ({err})") from None
+    except yaml.YAMLError as err:
+        mark = getattr(err, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark is not None else ""
+        raise UsageError(f"{path}: not valid YAML{where}") from None
+    if not isinstance(doc, dict):
+        raise UsageError(f"{path}: a study file must hold a mapping of keys (name, kind, ...)")
+    try:
+        return study_from_dict(apply_overrides(doc, overrides), source=str(path))
+    except UsageError as err:
+        raise UsageError(f"{path}: {err}") from None
+
+
+def default_completion_code(name: str, seed: int) -> str:
+    """A stable completion code for a study without one: 8 upper-case hex digits."""
+    return hashlib.sha256(f"prg-study:{name}:{seed}".encode()).hexdigest()[:8].upper()
+
+
+def normalise_answer(text: str) -> str:
+    """How typed words are compared in study 2 (the rule of
+    ``studies.analysis.schema.normalize_text``, which the page follows too): trimmed,
+    case-folded, inner white space collapsed."""
+    return " ".join(str(text).split()).casefold()
+
+
+# ---------------------------------------------------------------------------- trials and rows
+@dataclass(frozen=True)
+class Trial:
+    """One screen of the study.
+
+    Attributes
+    ----------
+    word : str
+    options : tuple of str
+        Writer ids of the samples shown, in screen order (``"robot"`` for the robot's). Study 1:
+        ``foils + 1`` of them; study 2: one.
+    robot_index : int or None
+        Study 1: 0-based position of the robot's sample (screen label ``robot_index + 1``);
+        study 2: None.
+    is_attention_check : bool
+    expect : dict or None
+        The passing response of an attention check.
+    instruction : str or None
+        The attention check's instruction.
+    """
+
+    word: str
+    options: tuple[str, ...]
+    robot_index: int | None = None
+    is_attention_check: bool = False
+    expect: dict | None = None
+    instruction: str | None = None
+
+    @property
+    def writer(self) -> str:
+        """Study 2: ``"robot"`` or ``"human"``."""
+        return ROBOT if self.options[0] == ROBOT else "human"
+
+
+@dataclass(frozen=True)
+class Row:
+    """Everything one participant sees, in order.
+
+    Attributes
+    ----------
+    row : int
+        0-based index in the trial list (what :func:`assign_row` returns).
+    list_id : str
+        Study 1: ``row-001`` ...; study 2: the list name (A or B).
+    trials : tuple of Trial
+    """
+
+    row: int
+    list_id: str
+    trials: tuple[Trial, ...]
+
+
+def latin_square(n: int, rng: np.random.Generator | None = None) -> np.ndarray:
+    """An ``n x n`` Latin square of 0..n-1: every symbol once per row and once per column.
+
+    Cyclic (``(r + c) mod n``); with ``rng`` its rows, columns and symbols are permuted, which
+    keeps it Latin.
+
+    Returns
+    -------
+    ndarray of int, shape (n, n)
+    """
+    if n < 1:
+        raise ValueError(f"n must be >= 1, got {n}")
+    square = (np.arange(n)[:, None] + np.arange(n)[None, :]) % n
+    if rng is not None:
+        square = square[rng.permutation(n)][:, rng.permutation(n)]
+        square = rng.permutation(n)[square]
+    return square
+
+
+def robot_positions(n_participants: int, n_words: int, n_options: int, seed: int) -> np.ndarray:
+    """The robot's 0-based screen position per participant and word (words in config order).
+
+    Row ``p`` of a seeded Latin square of size ``n_options``, taken at ``p mod n_options``,
+    gives word ``w`` the position ``square[p mod n_options, w mod n_options]``. Hence each
+    position comes up ``n_words / n_options`` times per participant and, for every word,
+    ``n_participants / n_options`` times across participants (exactly, when those divide;
+    otherwise within one).
+
+    Returns
+    -------
+    ndarray of int, shape (n_participants, n_words), values in 0..n_options - 1
+    """
+    square = latin_square(n_options, np.random.default_rng([seed, 1]))
+    p = np.arange(n_participants)[:, None] % n_options
+    w = np.arange(n_words)[None, :] % n_options
+    return square[p, w]
+
+
+def word_orders(n_participants: int, n_words: int, seed: int) -> np.ndarray:
+    """An independent seeded shuffle of the word indices per participant.
+
+    Returns
+    -------
+    ndarray of int, shape (n_participants, n_words)
+    """
+    return np.stack(
+        [np.random.default_rng([seed, 2, p]).permutation(n_words) for p in range(n_participants)]
+    ).reshape(n_participants, n_words)
+
+
+def with_checks(trials: Sequence[Trial], checks: Sequence[tuple[int, Trial]]) -> tuple[Trial, ...]:
+    """Insert attention-check trials: ``(after_trial, trial)`` goes after that many word trials
+    (checks with the same ``after_trial`` keep their order)."""
+    out: list[Trial] = []
+    pending = sorted(enumerate(checks), key=lambda item: (item[1][0], item[0]))
+    k = 0
+    for i in range(len(trials) + 1):
+        while k < len(pending) and pending[k][1][0] == i:
+            out.append(pending[k][1][1])
+            k += 1
+        if i < len(trials):
+            out.append(trials[i])
+    return tuple(out)
+
+
+def _writers(writers: Mapping[str, Sequence[str]], word: str, needed: int) -> list[str]:
+    ids = sorted(set(writers.get(word, ())) - {ROBOT})
+    if len(ids) < needed:
+        raise UsageError(f"word {word!r} has {len(ids)} human writers, the design needs {needed}")
+    return ids
+
+
+def turing_rows(config: StudyConfig, writers: Mapping[str, Sequence[str]]) -> tuple[Row, ...]:
+    """Study 1's trial list: one :class:`Row` per participant.
+
+    Parameters
+    ----------
+    config : StudyConfig
+        ``kind == "turing"``.
+    writers : mapping of str to sequence of str
+        Human writer ids available per word (at least ``foils`` each; the first
+        ``human_writers`` in sorted order are used).
+
+    Returns
+    -------
+    tuple of Row
+        Row ``p``: the words in a seeded order, per word ``foils`` human writers sampled without
+        replacement, and the robot at :func:`robot_positions`.
+    """
+    words = config.words
+    pools = {w: _writers(writers, w, config.foils)[: config.human_writers] for w in words}
+    positions = robot_positions(config.participants, len(words), config.n_options, config.seed)
+    orders = word_orders(config.participants, len(words), config.seed)
+    rows = []
+    for p in range(config.participants):
+        rng = np.random.default_rng([config.seed, 3, p])
+        main = [_turing_trial(config, pools, int(w), int(positions[p, w]), rng) for w in orders[p]]
+        rows.append(Row(p, f"row-{p + 1:03d}", _with_checks_of(main, config)))
+    return tuple(rows)
+
+
+def _turing_trial(
+    config: StudyConfig,
+    pools: Mapping[str, Sequence[str]],
+    w: int,
+    position: int,
+    rng: np.random.Generator,
+) -> Trial:
+    """Word ``w`` with ``foils`` writers drawn from its pool and the robot at ``position``."""
+    word = config.words[w]
+    foils = [str(x) for x in rng.choice(pools[word], config.foils, replace=False)]
+    return Trial(word, (*foils[:position], ROBOT, *foils[position:]), robot_index=position)
+
+
+def _with_checks_of(main: Sequence[Trial], config: StudyConfig) -> tuple[Trial, ...]:
+    """``main`` with the config's attention checks inserted. A check repeats one of the
+    participant's own screens (its ``word``'s, else the one just before it) so that it shows
+    nothing new: a second look at another sample could give the robot away (study 1) or prime
+    the reading (study 2)."""
+    checks = []
+    for c in config.attention_checks:
+        if c.word is not None:
+            base = next(t for t in main if t.word == c.word)
+        else:
+            base = main[max(c.after_trial - 1, 0)]
+        check = replace(base, is_attention_check=True, expect=c.expect, instruction=c.instruction)
+        checks.append((c.after_trial, check))
+    return with_checks(main, checks)
+
+
+def split_lists(words: Sequence[str], lists: Sequence[str], seed: int) -> dict[str, dict[str, str]]:
+    """Study 2's lists: per list name, ``{word: "human" | "robot"}``.
+
+    A seeded half of the words is human-written in the first list and robot-written in the
+    second; the other half the reverse.
+    """
+    n = len(words)
+    if n % 2:
+        raise UsageError(f"the readability lists need an even number of words, got {n}")
+    human_first = set(np.random.default_rng([seed, 4]).permutation(n)[: n // 2].tolist())
+    first = {w: ("human" if i in human_first else ROBOT) for i, w in enumerate(words)}
+    second = {w: (ROBOT if v == "human" else "human") for w, v in first.items()}
+    return {lists[0]: first, lists[1]: second}
+
+
+def readability_rows(config: StudyConfig, writers: Mapping[str, Sequence[str]]) -> tuple[Row, ...]:
+    """Study 2's trial list: one :class:`Row` per participant.
+
+    Participant ``p`` gets list ``lists[p mod 2]``; its human-written words show writer
+    ``pool[(p // 2 + word index) mod len(pool)]`` (every writer in turn); the words come in a
+    seeded order per participant.
+
+    Parameters
+    ----------
+    config : StudyConfig
+        ``kind == "readability"``.
+    writers : mapping of str to sequence of str
+        Human writer ids available per word (at least one; the first ``human_writers`` in
+        sorted order are used).
+    """
+    words = config.words
+    pools = {w: _writers(writers, w, 1)[: config.human_writers] for w in words}
+    assignment = split_lists(words, config.lists, config.seed)
+    orders = word_orders(config.participants, len(words), config.seed)
+    rows = []
+    for p in range(config.participants):
+        list_id = config.lists[p % 2]
+
+        def trial(w: int, source: str, p: int = p) -> Trial:
+            pool = pools[words[w]]
+            writer = ROBOT if source == ROBOT else pool[(p // 2 + w) % len(pool)]
+            return Trial(words[w], (writer,))
+
+        main = [trial(int(w), assignment[list_id][words[w]]) for w in orders[p]]
+        rows.append(Row(p, list_id, _with_checks_of(main, config)))
+    return tuple(rows)
+
+
+def design_rows(config: StudyConfig, writers: Mapping[str, Sequence[str]]) -> tuple[Row, ...]:
+    """:func:`turing_rows` or :func:`readability_rows`, by ``config.kind``."""
+    return (turing_rows if config.kind == "turing" else readability_rows)(config, writers)
+
+
+# ---------------------------------------------------------------------------- assignment
+def fnv1a32(text: str) -> int:
+    """32-bit FNV-1a hash of the UTF-8 bytes of ``text`` (the page computes the same)."""
+    h = 0x811C9DC5
+    for byte in text.encode("utf-8"):
+        h ^= byte
+        h = (h * 0x01000193) & 0xFFFFFFFF
+    return h
+
+
+def assign_row(participant_id: str, n_rows: int, salt: str = "") -> int:
+    """The row a participant gets from their id (the page's rule when no ``row`` is given).
+
+    ``fnv1a32(salt + ":" + participant_id) mod n_rows``, with the study's name as ``salt``: the
+    same Prolific id always lands on the same row; over many ids rows fill about evenly.
+    """
+    if n_rows < 1:
+        raise ValueError(f"n_rows must be >= 1, got {n_rows}")
+    return fnv1a32(f"{salt}:{participant_id}") % n_rows
