@@ -1,0 +1,426 @@
+"""Build a study's static web folder: stimuli, counterbalanced trial list, pages.
+
+:func:`build_study` (behind ``prg-study build``) writes ``studies/<name>/build/``::
+
+    index.html, study.js, study.css   the questionnaire (dependency-free; runs from file://)
+    config.js / config.json           page settings: columns, completion code and URL, saving
+    trials.js / trials.json           one counterbalanced row per participant, with ground truth
+    trials.csv                        the same, one line per stimulus shown (long format)
+    stim/<opaque>.png                 every sample, drawn alike (studies.stimuli)
+    stimuli.csv                       which PNG is which word, writer and source file
+    capture/                          the capture page for the human writers (index.html, ...)
+    sources/robot/<word>.json         the robot's word trajectories
+    manifest.json                     what was built, what is missing, app_version
+    README.md                         how to host it and the URL parameters
+
+Everything is written into a hidden folder beside the target and renamed into place at the end.
+Without enough human samples the build is *not ready*: it still writes the robot stimuli and the
+capture page, and the questionnaire page says what is missing (``BuildReport.missing``).
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+import os
+import shutil
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+import prg
+from studies.design import ROBOT, Row, StudyConfig, design_rows
+from studies.stimuli import (
+    HumanSamples,
+    RenderStyle,
+    Sample,
+    generate_robot_words,
+    load_human_samples,
+    load_robot_words,
+    render_sample,
+    save_png,
+    stimulus_name,
+)
+
+try:
+    from studies.analysis.schema import STUDY_COLUMNS
+except ImportError:  # the analysis package is not there: the columns it documents
+    _HEAD = ("participant_id", "session_id", "study", "list_id", "trial", "word")
+    _TAIL = ("rt_ms", "is_attention_check", "attention_pass", "timestamp", "app_version", "seed")
+    STUDY_COLUMNS = {
+        "turing": (*_HEAD, "robot_index", "chosen_index", "chose_robot", "confidence", *_TAIL),
+        "readability": (*_HEAD, "writer", "typed_text", "correct", *_TAIL),
+    }
+
+#: Recorded after the analysis columns: Prolific's STUDY_ID (the analysis ignores it).
+EXTRA_COLUMNS: tuple[str, ...] = ("study_id",)
+STUDY_ASSETS = {"study.html": "index.html", "study.js": "study.js", "study.css": "study.css"}
+CAPTURE_ASSETS = {
+    "capture.html": "index.html",
+    "capture.js": "capture.js",
+    "capture.css": "capture.css",
+}
+
+
+def response_columns(kind: str) -> tuple[str, ...]:
+    """The CSV columns the page writes for a study kind, in order."""
+    return (*STUDY_COLUMNS[kind], *EXTRA_COLUMNS)
+
+
+@dataclass
+class BuildReport:
+    """What :func:`build_study` wrote.
+
+    Attributes
+    ----------
+    out_dir : Path
+    ready : bool
+        The questionnaire can run (every word has its human writers).
+    missing : list of str
+        What is missing before it can, one line each.
+    notes : list of str
+        Human sample files or samples left out, and why.
+    n_stimuli : int
+    app_version : str
+    """
+
+    out_dir: Path
+    ready: bool
+    missing: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    n_stimuli: int = 0
+    app_version: str = ""
+
+
+def web_asset(name: str) -> bytes:
+    """A file of ``studies/web/``."""
+    return resources.files("studies").joinpath("web", name).read_bytes()
+
+
+def js_assignment(variable: str, value) -> str:
+    """``window.<variable> = <JSON>;`` safe inside an HTML page (no ``</script>``)."""
+    text = json.dumps(value, indent=1, ensure_ascii=False, sort_keys=True).replace("</", "<\\/")
+    return f"window.{variable} = {text};\n"
+
+
+def choose_writers(config: StudyConfig, humans: HumanSamples) -> tuple[dict, list[str]]:
+    """The human writers used per word (first ``human_writers`` in sorted order) and what is
+    missing."""
+    used: dict[str, list[str]] = {}
+    short: dict[int, list[str]] = {}
+    for word in config.words:
+        ids = sorted(humans.by_word.get(word, {}))
+        used[word] = ids[: config.human_writers]
+        if len(ids) < config.human_writers:
+            short.setdefault(len(ids), []).append(word)
+    missing = [
+        f"{', '.join(words)}: {n} of {config.human_writers} human writers each (record more "
+        "with capture/index.html, then rebuild with --human DIR)"
+        for n, words in sorted(short.items())
+    ]
+    return used, missing
+
+
+def trial_table(rows: Sequence[Row], files: dict[tuple[str, str], str]) -> str:
+    """``trials.csv``: one line per stimulus of every trial of every row (ground truth)."""
+    out = io.StringIO()
+    w = csv.writer(out, lineterminator="\n")
+    w.writerow(
+        [
+            "row",
+            "list_id",
+            "trial",
+            "word",
+            "position",
+            "writer_id",
+            "source",
+            "file",
+            "is_robot_position",
+            "is_attention_check",
+        ]
+    )
+    for row in rows:
+        for i, trial in enumerate(row.trials):
+            for pos, writer in enumerate(trial.options):
+                w.writerow(
+                    [
+                        row.row + 1,
+                        row.list_id,
+                        i,
+                        trial.word,
+                        pos,
+                        writer,
+                        ROBOT if writer == ROBOT else "human",
+                        files[(trial.word, writer)],
+                        "true" if writer == ROBOT else "false",
+                        "true" if trial.is_attention_check else "false",
+                    ]
+                )
+    return out.getvalue()
+
+
+def rows_document(rows: Sequence[Row], files: dict[tuple[str, str], str]) -> dict:
+    """``trials.json``: the rows as the page reads them."""
+    doc_rows = []
+    for row in rows:
+        trials = []
+        for trial in row.trials:
+            item = {
+                "word": trial.word,
+                "stimuli": [files[(trial.word, w)] for w in trial.options],
+                "writers": list(trial.options),
+                "is_attention_check": trial.is_attention_check,
+            }
+            if trial.robot_index is not None:
+                item["robot_index"] = trial.robot_index
+            else:
+                item["writer"] = trial.writer
+            if trial.is_attention_check:
+                item["expect"] = trial.expect
+                item["instruction"] = trial.instruction
+            trials.append(item)
+        doc_rows.append({"row": row.row + 1, "list_id": row.list_id, "trials": trials})
+    return {"rows": doc_rows}
+
+
+def _hash(*parts: bytes) -> str:
+    h = hashlib.sha256()
+    for part in parts:
+        h.update(hashlib.sha256(part).digest())
+    return h.hexdigest()
+
+
+def build_study(
+    config: StudyConfig,
+    human_dirs: Sequence[str | Path] = (),
+    robot_dir: str | Path | None = None,
+    ckpt: str | Path | None = None,
+    out_dir: str | Path | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> BuildReport:
+    """Build the study's web folder (see the module docstring).
+
+    Parameters
+    ----------
+    config : StudyConfig
+    human_dirs : sequence of path
+        Folders of human samples (capture JSON, strokes JSON, SVG), added to the config's
+        ``human.dirs``.
+    robot_dir : path, optional
+        Ready word trajectories (``<word>.json`` or ``<word>/word.json``); default: the
+        config's ``robot.dir``, else each word is written now with ``prg-write``'s task.
+    ckpt : path, optional
+        Checkpoint for writing the robot's words (default: the config's ``robot.ckpt``, else
+        ``models/<robot.family>/model.ckpt``).
+    out_dir : path, optional
+        Default ``studies/<name>/build`` (relative to the working directory).
+    progress : callable, optional
+        Called with one line per step.
+
+    Returns
+    -------
+    BuildReport
+
+    Raises
+    ------
+    UsageError
+        A folder or file that cannot be read, a bad render setting, a missing checkpoint.
+    """
+    say = progress or (lambda line: None)
+    style = RenderStyle.from_dict(config.render)
+    out = Path(out_dir) if out_dir is not None else Path("studies") / config.name / "build"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    staging = out.parent / f".{out.name}.tmp-{os.getpid()}"
+    shutil.rmtree(staging, ignore_errors=True)
+    staging.mkdir()
+    try:
+        report = _build_into(staging, config, style, human_dirs, robot_dir, ckpt, say)
+        old = out.parent / f".{out.name}.old-{os.getpid()}"
+        if out.exists():
+            os.replace(out, old)
+        os.replace(staging, out)
+        shutil.rmtree(old, ignore_errors=True)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    report.out_dir = out
+    return report
+
+
+def _build_into(
+    root: Path,
+    config: StudyConfig,
+    style: RenderStyle,
+    human_dirs: Sequence[str | Path],
+    robot_dir: str | Path | None,
+    ckpt: str | Path | None,
+    say: Callable[[str], None],
+) -> BuildReport:
+    # human samples first: a bad folder or file fails before the model runs
+    dirs = [*(config.human.get("dirs") or []), *human_dirs]
+    humans = load_human_samples(dirs, config.words, bool(config.human["accept_lifted"]))
+
+    # robot samples
+    sources = root / "sources" / "robot"
+    robot_dir = robot_dir if robot_dir is not None else config.robot.get("dir")
+    if robot_dir is not None:
+        robot = load_robot_words(robot_dir, config.words)
+        sources.mkdir(parents=True)
+        for word, sample in robot.items():
+            shutil.copyfile(sample.origin, sources / f"{word}.json")
+    else:
+        generate_robot_words(
+            config.words,
+            sources,
+            family=config.robot["family"],
+            ckpt=ckpt if ckpt is not None else config.robot.get("ckpt"),
+            overrides=config.robot["write_overrides"],
+            progress=say,
+        )
+        robot = load_robot_words(sources, config.words)
+
+    # what the design may show
+    writers, missing = choose_writers(config, humans)
+    if not dirs:
+        missing = [
+            f"no human samples were given: each of the {len(config.words)} words needs "
+            f"{config.human_writers} human writers; record them with capture/index.html and "
+            "rebuild with --human DIR (or list the folders in human.dirs)"
+        ]
+    ready = not missing
+
+    # stimuli: every sample the design may show, drawn alike, under opaque names
+    samples: list[Sample] = list(robot.values())
+    for word in config.words:
+        samples.extend(humans.by_word[word][w] for w in writers[word])
+    files: dict[tuple[str, str], str] = {}
+    table = io.StringIO()
+    stim_csv = csv.writer(table, lineterminator="\n")
+    stim_csv.writerow(["file", "word", "writer_id", "source", "origin"])
+    for i, sample in enumerate(samples):
+        name = f"stim/{stimulus_name(sample, f'{config.name}:{config.seed}')}"
+        save_png(render_sample(sample, style), root / name)
+        files[(sample.word, sample.writer_id)] = name
+        origin = Path(sample.origin)
+        if origin.is_relative_to(root):
+            origin = origin.relative_to(root)
+        stim_csv.writerow([name, sample.word, sample.writer_id, sample.source, origin.as_posix()])
+        if (i + 1) % 20 == 0 or i + 1 == len(samples):
+            say(f"stimuli drawn: {i + 1}/{len(samples)}")
+    (root / "stimuli.csv").write_text(table.getvalue(), encoding="utf-8")
+
+    # the design
+    rows = design_rows(config, writers) if ready else ()
+    trials = rows_document(rows, files)
+    (root / "trials.csv").write_text(trial_table(rows, files), encoding="utf-8")
+
+    # pages
+    assets = {dst: web_asset(src) for src, dst in STUDY_ASSETS.items()}
+    capture_assets = {dst: web_asset(src) for src, dst in CAPTURE_ASSETS.items()}
+    app_version = (
+        f"{prg.__version__}+"
+        + _hash(
+            json.dumps(trials, sort_keys=True).encode(),
+            json.dumps(_page_config(config, "", ready, missing), sort_keys=True).encode(),
+            *assets.values(),
+        )[:10]
+    )
+    page = _page_config(config, app_version, ready, missing)
+    for name, data in assets.items():
+        (root / name).write_bytes(data)
+    (root / "config.js").write_text(js_assignment("PRG_STUDY_CONFIG", page), encoding="utf-8")
+    (root / "trials.js").write_text(js_assignment("PRG_STUDY_TRIALS", trials), encoding="utf-8")
+    _write_json(root / "config.json", page)
+    _write_json(root / "trials.json", trials)
+    capture = root / "capture"
+    capture.mkdir()
+    for name, data in capture_assets.items():
+        (capture / name).write_bytes(data)
+    capture_cfg = {
+        "study": config.name,
+        "words": list(config.words),
+        "on_lift": config.capture["on_lift"],
+        "post_url": config.capture["post_url"],
+        "canvas_width": int(config.capture["canvas_width"]),
+        "canvas_height": int(config.capture["canvas_height"]),
+        "app_version": app_version,
+    }
+    (capture / "config.js").write_text(
+        js_assignment("PRG_CAPTURE_CONFIG", capture_cfg), encoding="utf-8"
+    )
+    report = BuildReport(root, ready, missing, humans.notes, len(samples), app_version)
+    _write_json(
+        root / "manifest.json",
+        {
+            "study": config.name,
+            "kind": config.kind,
+            "source": config.source,
+            "app_version": app_version,
+            "seed": config.seed,
+            "ready": ready,
+            "missing": missing,
+            "notes": humans.notes,
+            "words": list(config.words),
+            "participants": len(rows),
+            "stimuli": len(samples),
+            "human_writers": {w: writers[w] for w in config.words},
+            "render": vars(style),
+            "columns": list(response_columns(config.kind)),
+        },
+    )
+    (root / "README.md").write_text(_readme(config, page, ready, missing), encoding="utf-8")
+    return report
+
+
+def _page_config(config: StudyConfig, app_version: str, ready: bool, missing: list[str]) -> dict:
+    code = config.completion["code"]
+    url = config.completion["url"]
+    return {
+        "name": config.name,
+        "kind": config.kind,
+        "title": config.page["title"],
+        "consent": config.page["consent"],
+        "instructions": config.page["instructions"],
+        "confidence_labels": config.page["confidence_labels"],
+        "columns": list(response_columns(config.kind)),
+        "n_options": config.n_options if config.kind == "turing" else 1,
+        "seed": config.seed,
+        "app_version": app_version,
+        "ready": ready,
+        "missing": missing,
+        "completion": {
+            "code": code,
+            "redirect_url": url.replace("{code}", code) if url else None,
+            "redirect_delay_ms": int(config.completion["redirect_delay_ms"]),
+        },
+        "save": {
+            "download": bool(config.save["download"]),
+            "post_url": config.save["post_url"],
+        },
+    }
+
+
+def _write_json(path: Path, obj) -> None:
+    path.write_text(json.dumps(obj, indent=1, sort_keys=True, ensure_ascii=False) + "\n")
+
+
+def _readme(config: StudyConfig, page: dict, ready: bool, missing: list[str]) -> str:
+    status = "ready to run" if ready else "NOT READY:\n\n" + "\n".join(f"- {m}" for m in missing)
+    return f"""# Study `{config.name}` ({config.kind}) — {status}
+
+Open `index.html` (file:// works) or serve this folder from any static host
+(`python -m http.server -d .` then http://127.0.0.1:8000/). On Prolific use the study URL
+`https://HOST/PATH/index.html?PROLIFIC_PID={{{{%PROLIFIC_PID%}}}}&STUDY_ID={{{{%STUDY_ID%}}}}&SESSION_ID={{{{%SESSION_ID%}}}}`.
+
+- Rows: `trials.json` holds {config.participants} counterbalanced rows. `?row=N` (1-based) picks
+  row N; otherwise the row is `fnv1a32("{config.name}:" + PROLIFIC_PID) mod rows`
+  (`studies.design.assign_row`), or random without a PROLIFIC_PID. For exact balance give
+  each participant `?row=N` (a study per row, or a server that hands out rows in turn).
+- Responses: one CSV row per trial, columns {", ".join(page["columns"])}; downloaded at the end
+  {"and POSTed to " + page["save"]["post_url"] if page["save"]["post_url"] else "(set save.post_url to POST them as text/csv)"}.
+- Completion code `{page["completion"]["code"]}`; redirect to {page["completion"]["redirect_url"]}.
+- Ground truth: `trials.csv`, `stimuli.csv`. The capture page for human writers: `capture/index.html`
+  (`?writer=ID`); its JSON files are human samples for `prg-study build --human DIR`.
+"""

@@ -1,0 +1,156 @@
+"""``prg-study``: build and analyse human-vs-robot handwriting user studies.
+
+Examples
+--------
+``prg-study build conf/study/turing.yaml --human recordings/``
+``prg-study build conf/study/readability.yaml --human recordings/ --set participants=40``
+``prg-study build conf/study/turing.yaml --robot outputs/words/ --out /tmp/turing``
+
+``analyze``, ``power`` and ``simulate`` come from :mod:`studies.analysis.commands` when it is
+installed. A mistake the user can fix (:class:`prg.errors.UsageError`) is one line,
+``prg-study: error: <message>``, exit code 2; other :class:`prg.errors.PRGError` exit 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from typing import NoReturn
+
+from prg.errors import PRGError, UsageError
+
+PROG = "prg-study"
+
+
+class Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line: ``prg-study: error: <message>`` (exit 2)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{PROG}: error: {' '.join(message.split())}\n")
+
+
+def _say(line: str) -> None:
+    print(f"{PROG}: {line}", file=sys.stderr, flush=True)
+
+
+def build_command(args: argparse.Namespace) -> int:
+    """``prg-study build``: see :func:`studies.bundle.build_study`."""
+    from studies.bundle import build_study
+    from studies.design import load_study
+
+    config = load_study(args.config, args.set or [])
+    report = build_study(
+        config,
+        human_dirs=args.human or [],
+        robot_dir=args.robot,
+        ckpt=args.ckpt,
+        out_dir=args.out,
+        progress=None if args.quiet else _say,
+    )
+    for note in report.notes:
+        _say(f"note: {note}")
+    if report.ready:
+        _say(
+            f"{config.name}: ready — {report.out_dir}/index.html "
+            f"({config.participants} rows, {report.n_stimuli} stimuli, {report.app_version})"
+        )
+        return 0
+    _say(f"{config.name}: NOT READY — built the robot stimuli and {report.out_dir}/capture/")
+    for line in report.missing:
+        _say(f"missing: {line}")
+    if args.require_ready:
+        raise UsageError(f"{config.name} is not ready: {len(report.missing)} missing item(s)")
+    return 0
+
+
+def _add_build(subparsers) -> None:
+    p = subparsers.add_parser(
+        "build",
+        help="build a study's static web folder (stimuli, trial list, pages)",
+        description=(
+            "Build studies/<name>/build/: the questionnaire (index.html), the capture page for "
+            "human writers (capture/), the stimuli and the counterbalanced trial list."
+        ),
+    )
+    p.add_argument("config", help="the study YAML, e.g. conf/study/turing.yaml")
+    p.add_argument(
+        "--human",
+        action="append",
+        metavar="DIR",
+        help="folder of human samples (capture JSON, strokes JSON, SVG); repeatable",
+    )
+    p.add_argument(
+        "--robot",
+        metavar="DIR",
+        help="ready robot word trajectories (<word>.json or <word>/word.json) instead of "
+        "writing the words with the model",
+    )
+    p.add_argument("--ckpt", metavar="PATH", help="model checkpoint for the robot's words")
+    p.add_argument("--out", metavar="DIR", help="output folder (default studies/<name>/build)")
+    p.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help="override a study setting, e.g. --set participants=40 --set completion.code=XYZ",
+    )
+    p.add_argument(
+        "--require-ready",
+        action="store_true",
+        help="exit 2 when human samples are missing (default: build what can be built)",
+    )
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+    p.set_defaults(func=build_command)
+
+
+def _add_unavailable(subparsers, reason: str) -> None:
+    """Stand-ins for the analysis commands when :mod:`studies.analysis.commands` is missing."""
+    for name in ("analyze", "power", "simulate"):
+        p = subparsers.add_parser(name, help=f"(unavailable: {reason})", add_help=False)
+        p.add_argument("rest", nargs=argparse.REMAINDER)
+
+        def unavailable(args: argparse.Namespace, name: str = name) -> int:
+            raise UsageError(f"{name} is not available: {reason}")
+
+        p.set_defaults(func=unavailable)
+
+
+def make_parser() -> Parser:
+    """The ``prg-study`` parser with every available sub-command."""
+    parser = Parser(prog=PROG, description=__doc__.split("\n\n")[0])
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
+    _add_build(subparsers)
+    try:
+        from studies.analysis.commands import register as register_analysis
+    except ImportError as err:
+        _add_unavailable(subparsers, f"studies.analysis.commands cannot be imported ({err})")
+    else:
+        register_analysis(subparsers)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``prg-study``; returns the exit code."""
+    parser = make_parser()
+    args = parser.parse_args(argv)
+    if getattr(args, "func", None) is None:
+        parser.error("choose a command: " + ", ".join(_choices(parser)))
+    try:
+        return int(args.func(args) or 0)
+    except PRGError as err:
+        print(f"{PROG}: error: {' '.join(str(err).split())}", file=sys.stderr)
+        return err.exit_code
+    except KeyboardInterrupt:
+        print(f"{PROG}: error: interrupted; nothing was written", file=sys.stderr)
+        return 130
+
+
+def _choices(parser: argparse.ArgumentParser) -> list[str]:
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return list(action.choices)
+    return []
+
+
+if __name__ == "__main__":
+    sys.exit(main())

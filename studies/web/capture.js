@@ -1,0 +1,296 @@
+/*
+ * prg-study capture page: records a writer's pen trajectories, one word at a time, written in
+ * one continuous stroke (the paper's group 1). No dependencies; runs from file://.
+ *
+ * Reads window.PRG_CAPTURE_CONFIG (config.js, written by `prg-study build`): words, canvas size,
+ * on_lift ("restart": lifting the pen clears the word and the writer starts again; "flag": the
+ * extra strokes are kept and the sample is marked lifted), post_url, app_version.
+ * URL parameter: writer=ID fills in the writer id.
+ *
+ * Saves one JSON document per writer (downloaded, and POSTed as text/plain when post_url
+ * is set):
+ *   { "schema": "prg.handwriting_capture", "version": 1, "writer_id": "w01",
+ *     "study": ..., "app_version": ..., "started_at": ISO, "finished_at": ISO, "user_agent": ...,
+ *     "on_lift": "restart",
+ *     "canvas": { "width": 900, "height": 300, "units": "css_px", "y_down": true,
+ *                 "device_pixel_ratio": 2, "baseline_y": 195 },
+ *     "samples": [ { "word": "cat", "strokes": [[[x, y, t_ms, pressure], ...], ...],
+ *                    "lifted": false, "restarts": 0, "skipped": false, "pointer_type": "pen",
+ *                    "started_at": ISO, "duration_ms": 1830.4 }, ... ] }
+ * x, y in canvas CSS pixels (y down), t_ms from the sample's first pen-down.
+ */
+(function () {
+  "use strict";
+
+  var cfg = window.PRG_CAPTURE_CONFIG;
+  var app = document.getElementById("app");
+  var WRITER_RE = /^[A-Za-z0-9_-]{1,64}$/;
+
+  function el(tag, attrs, children) {
+    var node = document.createElement(tag);
+    Object.keys(attrs || {}).forEach(function (key) {
+      var value = attrs[key];
+      if (value === null || value === undefined || value === false) return;
+      if (key === "text") node.textContent = value;
+      else node.setAttribute(key, value === true ? "" : String(value));
+    });
+    (children || []).forEach(function (child) {
+      node.appendChild(typeof child === "string" ? document.createTextNode(child) : child);
+    });
+    return node;
+  }
+
+  function show(nodes) {
+    app.textContent = "";
+    nodes.forEach(function (n) { app.appendChild(n); });
+  }
+
+  var params = new URLSearchParams(window.location.search);
+  var state = {
+    writer_id: null,
+    started_at: null,
+    index: 0,
+    samples: [],
+    document: null,
+    posted: null,
+  };
+  window.PRGCapture = { state: state, config: cfg };
+
+  function baselineY() { return Math.round(cfg.canvas_height * 0.65); }
+
+  function intro() {
+    var input = el("input", { type: "text", id: "writer-id", autocomplete: "off", spellcheck: "false", "aria-label": "writer id" });
+    input.value = params.get("writer") || "";
+    var begin = el("button", { class: "primary", id: "begin", text: "Begin" });
+    var hint = el("p", { class: "note", id: "writer-hint" });
+    function check() {
+      var v = input.value.trim();
+      var ok = WRITER_RE.test(v) && v.toLowerCase() !== "robot";
+      begin.disabled = !ok;
+      hint.textContent = ok || v === "" ? "" : "Use letters, digits, - or _ (up to 64), not \u201crobot\u201d.";
+      return ok;
+    }
+    input.addEventListener("input", check);
+    begin.addEventListener("click", function () {
+      if (!check()) return;
+      state.writer_id = input.value.trim();
+      state.started_at = new Date().toISOString();
+      word(0);
+    });
+    check();
+    show([
+      el("h1", { text: "Handwriting recording" }),
+      el("p", { text: "You will see " + cfg.words.length + " words, one at a time. Write each word in cursive handwriting " +
+        "in the box, in one continuous movement: do not lift the pen (or finger, or mouse button) until the word is finished. " +
+        "Dots and crossings are not needed." }),
+      el("p", { text: "Use a pen or stylus if you have one. Write at your usual size along the grey line." }),
+      el("p", {}, [el("label", { for: "writer-id", text: "Writer id: " }), input]),
+      hint,
+      el("div", { class: "actions" }, [begin]),
+    ]);
+    if (!input.value) input.focus();
+  }
+
+  function word(index) {
+    state.index = index;
+    if (index >= cfg.words.length) { finish(); return; }
+    var text = cfg.words[index];
+    var dpr = window.devicePixelRatio || 1;
+    var pad = el("canvas", { id: "pad", width: Math.round(cfg.canvas_width * dpr), height: Math.round(cfg.canvas_height * dpr) });
+    pad.style.width = cfg.canvas_width + "px";
+    pad.style.height = cfg.canvas_height + "px";
+    var ctx = pad.getContext("2d");
+    var message = el("p", { class: "note", id: "message" });
+    var next = el("button", { class: "primary", id: "next", disabled: true, text: index + 1 < cfg.words.length ? "Next word" : "Finish" });
+    var clear = el("button", { id: "clear", text: "Clear" });
+    var skip = el("button", { id: "skip", text: "Skip this word" });
+    var sample = null;
+    var drawing = null;  // the stroke being drawn
+
+    function reset() {
+      sample = {
+        word: text, strokes: [], lifted: false, restarts: sample ? sample.restarts : 0,
+        skipped: false, pointer_type: null, started_at: null, duration_ms: 0, t0: null,
+      };
+      drawing = null;
+      ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+      ctx.clearRect(0, 0, cfg.canvas_width, cfg.canvas_height);
+      ctx.save();
+      ctx.strokeStyle = "#c8c8c8";
+      ctx.setLineDash([6, 6]);
+      ctx.lineWidth = 1;
+      ctx.beginPath();
+      ctx.moveTo(10, baselineY() + 0.5);
+      ctx.lineTo(cfg.canvas_width - 10, baselineY() + 0.5);
+      ctx.stroke();
+      ctx.restore();
+      next.disabled = true;
+    }
+
+    function point(event) {
+      var rect = pad.getBoundingClientRect();
+      var x = (event.clientX - rect.left) * (cfg.canvas_width / rect.width);
+      var y = (event.clientY - rect.top) * (cfg.canvas_height / rect.height);
+      return [
+        Math.round(x * 100) / 100,
+        Math.round(y * 100) / 100,
+        Math.round((event.timeStamp - sample.t0) * 10) / 10,
+        Math.round((event.pressure || 0) * 1000) / 1000,
+      ];
+    }
+
+    function ink(a, b) {
+      ctx.strokeStyle = "#000";
+      ctx.lineWidth = 3;
+      ctx.lineCap = "round";
+      ctx.lineJoin = "round";
+      ctx.beginPath();
+      ctx.moveTo(a[0], a[1]);
+      ctx.lineTo(b[0], b[1]);
+      ctx.stroke();
+    }
+
+    function add(event) {
+      var p = point(event);
+      var last = drawing.points[drawing.points.length - 1];
+      if (last && last[0] === p[0] && last[1] === p[1]) return;
+      if (last) ink(last, p);
+      drawing.points.push(p);
+    }
+
+    pad.addEventListener("pointerdown", function (event) {
+      if (event.pointerType === "mouse" && event.button !== 0) return;
+      if (drawing) return;
+      event.preventDefault();
+      if (sample.strokes.length > 0) {  // the pen was lifted and put down again
+        if (cfg.on_lift === "restart") {
+          var restarts = sample.restarts + 1;
+          reset();
+          sample.restarts = restarts;
+          message.className = "error";
+          message.textContent = "The pen was lifted, so the word was cleared: please write it again in one movement.";
+        } else {
+          sample.lifted = true;
+          message.className = "error";
+          message.textContent = "The pen was lifted: this sample is marked. Clear it to start again.";
+        }
+      }
+      if (sample.t0 === null) {
+        sample.t0 = event.timeStamp;
+        sample.started_at = new Date().toISOString();
+        sample.pointer_type = event.pointerType;
+      }
+      try { pad.setPointerCapture(event.pointerId); } catch (e) { /* synthetic events */ }
+      drawing = { id: event.pointerId, points: [] };
+      sample.strokes.push(drawing.points);
+      add(event);
+    });
+    pad.addEventListener("pointermove", function (event) {
+      if (!drawing || event.pointerId !== drawing.id) return;
+      var events = event.getCoalescedEvents ? event.getCoalescedEvents() : [];
+      (events.length ? events : [event]).forEach(add);
+    });
+    function up(event) {
+      if (!drawing || event.pointerId !== drawing.id) return;
+      add(event);
+      drawing = null;
+      var last = sample.strokes[sample.strokes.length - 1];
+      sample.duration_ms = last[last.length - 1][2];
+      next.disabled = false;
+    }
+    pad.addEventListener("pointerup", up);
+    pad.addEventListener("pointercancel", up);
+
+    clear.addEventListener("click", function () {
+      reset();
+      message.className = "note";
+      message.textContent = "";
+    });
+    function keep(s) {
+      delete s.t0;
+      state.samples.push(s);
+      word(index + 1);
+    }
+    next.addEventListener("click", function () { if (sample.strokes.length && !drawing) keep(sample); });
+    skip.addEventListener("click", function () {
+      reset();
+      sample.skipped = true;
+      keep(sample);
+    });
+
+    show([
+      el("p", { class: "progress", id: "progress", text: "Word " + (index + 1) + " of " + cfg.words.length }),
+      el("p", { text: "Write this word in one movement, without lifting the pen:" }),
+      el("p", { class: "word", id: "word", text: text }),
+      pad,
+      message,
+      el("div", { class: "actions" }, [next, clear, skip]),
+    ]);
+    reset();
+  }
+
+  function captureDocument() {
+    return {
+      schema: "prg.handwriting_capture",
+      version: 1,
+      writer_id: state.writer_id,
+      study: cfg.study,
+      app_version: cfg.app_version,
+      started_at: state.started_at,
+      finished_at: new Date().toISOString(),
+      user_agent: navigator.userAgent,
+      on_lift: cfg.on_lift,
+      canvas: {
+        width: cfg.canvas_width,
+        height: cfg.canvas_height,
+        units: "css_px",
+        y_down: true,
+        device_pixel_ratio: window.devicePixelRatio || 1,
+        baseline_y: baselineY(),
+      },
+      samples: state.samples,
+    };
+  }
+
+  function download(text) {
+    var blob = new Blob([text], { type: "application/json" });
+    var stamp = new Date().toISOString().replace(/[-:]/g, "").replace(/\..*$/, "");
+    var a = el("a", { href: URL.createObjectURL(blob), download: "capture_" + state.writer_id + "_" + stamp + ".json" });
+    document.body.appendChild(a);
+    a.click();
+    setTimeout(function () { URL.revokeObjectURL(a.href); a.remove(); }, 60000);
+  }
+
+  function finish() {
+    state.document = captureDocument();
+    var text = JSON.stringify(state.document);
+    var status = el("p", { class: "note", id: "done-status" });
+    var again = el("button", { class: "primary", id: "download", text: "Download the recording (JSON)" });
+    again.addEventListener("click", function () { download(text); });
+    var recorded = state.samples.filter(function (s) { return !s.skipped; }).length;
+    show([
+      el("h1", { text: "Thank you!" }),
+      el("p", { id: "done-text", text: recorded + " of " + cfg.words.length + " words were recorded for writer " + state.writer_id + "." }),
+      status,
+      el("div", { class: "actions" }, [again]),
+    ]);
+    download(text);
+    if (cfg.post_url) {
+      status.textContent = "Sending\u2026";
+      fetch(cfg.post_url, { method: "POST", headers: { "Content-Type": "text/plain;charset=utf-8" }, body: text })
+        .then(function (r) {
+          if (!r.ok) throw new Error("HTTP " + r.status);
+          state.posted = true;
+          status.textContent = "The recording was sent.";
+        })
+        .catch(function (err) {
+          state.posted = false;
+          status.className = "error";
+          status.textContent = "The recording could not be sent (" + err.message + "); please keep the downloaded file.";
+        });
+    }
+  }
+
+  if (!cfg) app.textContent = "This page is missing config.js; rebuild it with prg-study build.";
+  else intro();
+})();

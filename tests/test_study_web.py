@@ -1,0 +1,500 @@
+"""The built study folders, driven start to finish in a real headless chromium.
+
+``prg-study build`` writes a questionnaire page (study 1 or 2) and a capture page for the human
+writers. Each test drives a page the way a participant or writer would (clicks, typing, mouse
+strokes) and asserts what the page saved: the response CSV that the analysis reads, the POSTed
+copy, the redirect to Prolific, the capture JSON — and that JSON fed back as human samples.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+from urllib.parse import parse_qs, urlparse
+
+import pytest
+
+from studies.analysis.schema import STUDY1_COLUMNS, STUDY2_COLUMNS
+from studies.bundle import response_columns
+from studies.cli import main
+from studies.design import assign_row, fnv1a32
+from tests.conftest_browser import browser, human_dir, read_csv, robot_dir, serve
+
+REPO = Path(__file__).resolve().parents[1]
+WORDS = ["cat", "dog", "sun", "egg", "ink", "owl"]
+PROLIFIC = "https://app.prolific.com/**"
+COLLECT = "https://collect.example.org/responses"
+
+
+@pytest.fixture(scope="module")
+def chromium():
+    with browser() as b:
+        yield b
+
+
+@pytest.fixture
+def page(chromium):
+    context = chromium.new_context(accept_downloads=True)
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda err: errors.append(str(err)))
+    page.route(PROLIFIC, lambda r: r.fulfill(status=200, content_type="text/html", body="done"))
+    yield page
+    context.close()
+    assert errors == [], f"JavaScript errors: {errors}"
+
+
+@pytest.fixture(scope="module")
+def samples(tmp_path_factory) -> dict[str, Path]:
+    root = tmp_path_factory.mktemp("samples")
+    return {"robot": robot_dir(root / "robot", WORDS), "human": human_dir(root / "human", WORDS, 5)}
+
+
+def build(
+    out: Path, study: str, *settings: str, robot: Path | None = None, human: Path | None = None
+) -> Path:
+    """``prg-study build`` of a conf/study file for :data:`WORDS` (5 human writers a word)."""
+    args = ["build", str(REPO / f"conf/study/{study}.yaml"), "--out", str(out), "-q"]
+    args += ["--robot", str(robot)] if robot else []
+    args += ["--human", str(human)] if human else []
+    for s in (f"words=[{', '.join(WORDS)}]", "human_writers=5", *settings):
+        args += ["--set", s]
+    assert main(args) == 0
+    return out
+
+
+@pytest.fixture(scope="module")
+def turing_build(tmp_path_factory, samples) -> Path:
+    out = tmp_path_factory.mktemp("turing") / "build"
+    return build(
+        out,
+        "turing",
+        "participants=10",
+        "completion.code=TEST-CODE",
+        "completion.redirect_delay_ms=50",
+        f"save.post_url={COLLECT}",
+        "attention_checks=[{after_trial: 2, instruction: 'Choose sample 4 and confidence 2.',"
+        " expect: {choose_sample: 4, confidence: 2}}]",
+        **samples,
+    )
+
+
+@pytest.fixture(scope="module")
+def readability_build(tmp_path_factory, samples) -> Path:
+    out = tmp_path_factory.mktemp("readability") / "build"
+    return build(
+        out,
+        "readability",
+        "participants=4",
+        "completion.url=null",
+        "attention_checks=[{after_trial: 3, instruction: 'Type blue.',"
+        " expect: {typed_text: blue}}]",
+        **samples,
+    )
+
+
+def start(page, url: str) -> dict:
+    """Consent, instructions, wait for the stimuli; returns the participant's trial row."""
+    page.goto(url)
+    page.check("#consent-agree")
+    page.click("#consent-continue")
+    page.click("#start:not([disabled])")
+    return page.evaluate("PRGStudy.state.row")
+
+
+def bool_(text: str) -> bool:
+    assert text in ("true", "false"), text
+    return text == "true"
+
+
+# ---------------------------------------------------------------------------- study 1
+def test_turing_study_runs_to_completion_over_http(page, turing_build):
+    posted = []
+
+    def collect(route):
+        posted.append(route.request.post_data)
+        route.fulfill(status=200, headers={"Access-Control-Allow-Origin": "*"}, body="ok")
+
+    page.route(COLLECT, collect)
+    trials = json.loads((turing_build / "trials.json").read_text())["rows"]
+    config = json.loads((turing_build / "config.json").read_text())
+    with serve(turing_build) as base:
+        row = start(page, f"{base}/index.html?PROLIFIC_PID=5f8e2a&STUDY_ID=st1&SESSION_ID=se9")
+        expected_row = assign_row("5f8e2a", 10, "turing")
+        assert row == trials[expected_row]  # the page and Python pick the same row
+        picks = []
+        with page.expect_download() as download:
+            for i, trial in enumerate(row["trials"]):
+                assert page.text_content("#progress") == f"Trial {i + 1} of {len(WORDS) + 1}"
+                if trial["is_attention_check"]:
+                    assert "Choose sample 4" in page.text_content("#check-instruction")
+                    choice, confidence = 3, 2
+                else:  # the robot on even trials, its right-hand neighbour on odd ones
+                    choice = (trial["robot_index"] + (i % 2)) % 5
+                    confidence = 1 + i % 5
+                picks.append((choice, confidence))
+                page.click(f"[data-option='{choice + 1}']")
+                assert page.is_disabled("#next")  # confidence still missing
+                page.click(f"[data-confidence='{confidence}']")
+                page.click("#next")
+        assert page.text_content("#completion-code") == "TEST-CODE"
+        page.wait_for_url(PROLIFIC)
+    assert parse_qs(urlparse(page.url).query) == {"cc": ["TEST-CODE"]}
+    text = Path(download.value.path()).read_bytes().decode("utf-8")
+    assert download.value.suggested_filename.startswith("turing_5f8e2a_")
+    assert posted == [text]  # the same file, byte for byte (RFC 4180 line ends)
+
+    columns, rows = read_csv(text)
+    assert columns == [*STUDY1_COLUMNS, "study_id"] == list(response_columns("turing"))
+    assert columns == config["columns"]
+    assert len(rows) == len(row["trials"]) == len(WORDS) + 1
+    for i, (r, trial, (choice, confidence)) in enumerate(zip(rows, row["trials"], picks)):
+        assert (r["participant_id"], r["study_id"], r["session_id"]) == ("5f8e2a", "st1", "se9")
+        assert (r["study"], r["list_id"], r["trial"]) == ("turing", row["list_id"], str(i))
+        assert r["word"] == trial["word"]
+        assert int(r["robot_index"]) == trial["robot_index"]
+        assert trial["writers"][trial["robot_index"]] == "robot"
+        assert int(r["chosen_index"]) == choice and int(r["confidence"]) == confidence
+        assert bool_(r["chose_robot"]) == (choice == trial["robot_index"])
+        assert bool_(r["is_attention_check"]) == trial["is_attention_check"]
+        assert r["attention_pass"] == ("true" if trial["is_attention_check"] else "")
+        assert float(r["rt_ms"]) >= 0
+        assert r["timestamp"].endswith("Z") and r["app_version"] == config["app_version"]
+        assert r["seed"] == "2022"
+    assert [r["is_attention_check"] for r in rows].count("true") == 1
+    assert rows[2]["is_attention_check"] == "true"
+    assert sorted(r["word"] for r in rows if r["is_attention_check"] == "false") == sorted(WORDS)
+
+
+def test_page_hash_matches_python_and_row_parameter_wins(page, turing_build):
+    page.goto((turing_build / "index.html").as_uri() + "?PROLIFIC_PID=abc&row=7")
+    for text in ["", "a", "foobar", "turing:5f8e2a", "ünï©ødé"]:
+        assert page.evaluate("t => PRGStudy.fnv1a32(t)", text) == fnv1a32(text)
+    page.check("#consent-agree")
+    page.click("#consent-continue")
+    assert page.evaluate("PRGStudy.state.row.list_id") == "row-007"
+    assert page.evaluate("PRGStudy.state.assignment") == "url"
+
+
+def test_a_failed_post_keeps_the_participant_with_their_answers(page, turing_build):
+    page.route(COLLECT, lambda route: route.fulfill(status=500, body="down"))
+    row = start(page, (turing_build / "index.html").as_uri() + "?PROLIFIC_PID=p2&row=1")
+    with page.expect_download() as download:
+        for _ in row["trials"]:
+            page.click("[data-option='1']")
+            page.click("[data-confidence='3']")
+            page.click("#next")
+    page.wait_for_function("PRGStudy.state.saved === false", timeout=10_000)
+    assert "could not be sent" in page.text_content("#save-status")
+    page.wait_for_timeout(300)  # longer than the redirect delay: no redirect
+    assert page.url.startswith("file://")
+    _, rows = read_csv(Path(download.value.path()).read_text())
+    assert len(rows) == len(row["trials"]) and {r["chosen_index"] for r in rows} == {"0"}
+    failed = [r for r in rows if r["is_attention_check"] == "true"]
+    assert [r["attention_pass"] for r in failed] == ["false"]
+
+
+def test_declining_consent_records_nothing(page, turing_build):
+    page.goto((turing_build / "index.html").as_uri())
+    assert page.is_disabled("#consent-continue")
+    page.click("#consent-decline")
+    assert "no answers were recorded" in page.text_content("#declined")
+    assert page.evaluate("PRGStudy.state.records.length") == 0
+
+
+# ---------------------------------------------------------------------------- study 2
+def test_readability_study_runs_from_a_file_url(page, readability_build):
+    trials = json.loads((readability_build / "trials.json").read_text())["rows"]
+    row = start(page, (readability_build / "index.html").as_uri() + "?row=2&SESSION_ID=s")
+    assert row == trials[1] and row["list_id"] == "B"
+    typed = []
+    with page.expect_download() as download:
+        for i, trial in enumerate(row["trials"]):
+            assert page.is_disabled("#next")
+            if trial["is_attention_check"]:
+                answer = "blue"
+            elif i == 0:
+                answer = None  # "I can't read it"
+            elif i % 2:
+                answer = f"  {trial['word'].upper()} "  # right, in capitals with spaces
+            else:
+                answer = trial["word"] + "x"  # wrong
+            typed.append(answer)
+            if answer is None:
+                page.click("#cannot-read")
+            else:
+                page.fill("#answer", answer)
+                page.press("#answer", "Enter")
+    assert (
+        page.text_content("#completion-code")
+        == json.loads((readability_build / "config.json").read_text())["completion"]["code"]
+    )
+    assert page.locator("#finish").count() == 0  # no completion URL: no redirect
+    columns, rows = read_csv(Path(download.value.path()).read_text())
+    assert columns == [*STUDY2_COLUMNS, "study_id"]
+    assert len(rows) == len(WORDS) + 1
+    for r, trial, answer in zip(rows, row["trials"], typed):
+        assert r["participant_id"].startswith("anon-") and r["session_id"] == "s"
+        assert (r["study"], r["list_id"], r["word"]) == ("readability", "B", trial["word"])
+        assert (
+            r["writer"]
+            == trial["writer"]
+            == ("robot" if trial["writers"] == ["robot"] else "human")
+        )
+        assert r["typed_text"] == ("" if answer is None else answer.strip())
+        if trial["is_attention_check"]:
+            assert (r["attention_pass"], r["correct"]) == ("true", "false")
+        else:
+            assert bool_(r["correct"]) == (
+                answer is not None and answer.strip().lower() == trial["word"]
+            )
+    assert [r["writer"] for r in rows if r["is_attention_check"] == "false"].count("robot") == 3
+
+
+# ---------------------------------------------------------------------------- the capture page
+def write_word(page, k: int, lift: bool = False) -> None:
+    """Draw a loopy stroke on the pad with the mouse (optionally lifting the button midway)."""
+    box = page.locator("#pad").bounding_box()
+    x0, y0 = box["x"] + 60, box["y"] + 190
+    page.mouse.move(x0, y0)
+    page.mouse.down()
+    for i in range(1, 36):
+        t = i / 5
+        page.mouse.move(x0 + 18 * t + 25 * math.sin(t * 6 + k), y0 - 40 - 35 * math.cos(t * 6 + k))
+        if lift and i == 18:
+            page.mouse.up()
+            page.mouse.down()
+    page.mouse.up()
+
+
+def capture(page, folder: Path, writer: str, restart_on: int | None = None) -> dict:
+    """Record every word of the capture page as ``writer``; returns the saved JSON."""
+    page.goto((folder / "capture" / "index.html").as_uri() + f"?writer={writer}")
+    page.click("#begin")
+    words = page.evaluate("PRGCapture.config.words")
+    with page.expect_download() as download:
+        for k, word in enumerate(words):
+            assert page.text_content("#word") == word
+            assert page.is_disabled("#next")
+            write_word(page, k, lift=k == restart_on)
+            if k == restart_on:
+                assert "write it again" in page.text_content("#message")
+            page.click("#next")
+    assert download.value.suggested_filename.startswith(f"capture_{writer}_")
+    return json.loads(Path(download.value.path()).read_text())
+
+
+def test_capture_json_round_trips_into_a_runnable_study(page, tmp_path, samples):
+    unready = build(
+        tmp_path / "first",
+        "turing",
+        "words=[cat, dog]",
+        "attention_checks=[]",
+        robot=samples["robot"],
+    )
+    assert json.loads((unready / "manifest.json").read_text())["ready"] is False
+    recordings = tmp_path / "recordings"
+    recordings.mkdir()
+    for n in range(3):
+        doc = capture(page, unready, f"w{n}", restart_on=1 if n == 0 else None)
+        (recordings / f"w{n}.json").write_text(json.dumps(doc))
+
+    doc = json.loads((recordings / "w0.json").read_text())
+    assert (doc["schema"], doc["version"], doc["writer_id"]) == ("prg.handwriting_capture", 1, "w0")
+    assert doc["canvas"]["y_down"] is True and doc["canvas"]["units"] == "css_px"
+    assert [s["word"] for s in doc["samples"]] == ["cat", "dog"]
+    for s in doc["samples"]:
+        (stroke,) = s["strokes"]  # one continuous stroke
+        assert len(stroke) >= 15 and all(len(p) == 4 for p in stroke)
+        times = [p[2] for p in stroke]
+        assert times[0] == 0 and times == sorted(times) and s["duration_ms"] == times[-1]
+        assert all(
+            0 <= p[0] <= doc["canvas"]["width"] and 0 <= p[1] <= doc["canvas"]["height"]
+            for p in stroke
+        )
+        assert s["pointer_type"] == "mouse" and s["lifted"] is False
+    assert [s["restarts"] for s in doc["samples"]] == [0, 1]
+    assert len(doc["samples"][1]["strokes"][0]) < 25  # only the attempt after the lift is kept
+
+    ready = build(
+        tmp_path / "second",
+        "turing",
+        "words=[cat, dog]",
+        "human_writers=3",
+        "foils=2",
+        "participants=3",
+        "completion.redirect_delay_ms=0",
+        "attention_checks=[]",
+        robot=samples["robot"],
+        human=recordings,
+    )
+    manifest = json.loads((ready / "manifest.json").read_text())
+    assert manifest["ready"] is True
+    assert manifest["human_writers"] == {"cat": ["w0", "w1", "w2"], "dog": ["w0", "w1", "w2"]}
+    row = start(page, (ready / "index.html").as_uri() + "?PROLIFIC_PID=rt1")
+    assert page.locator(".option").count() == 3  # the robot and two foils
+    with page.expect_download() as download:
+        for trial in row["trials"]:
+            page.click(f"[data-option='{trial['robot_index'] + 1}']")
+            page.click("[data-confidence='5']")
+            page.click("#next")
+    page.wait_for_url(PROLIFIC)
+    _, rows = read_csv(Path(download.value.path()).read_text())
+    assert [r["chose_robot"] for r in rows] == ["true", "true"]
+
+
+def test_capture_page_can_flag_lifts_instead_of_restarting(page, tmp_path, samples):
+    folder = build(
+        tmp_path / "b",
+        "turing",
+        "words=[cat]",
+        "attention_checks=[]",
+        "capture.on_lift=flag",
+        robot=samples["robot"],
+    )
+    page.goto((folder / "capture" / "index.html").as_uri())
+    assert page.is_disabled("#begin")
+    page.fill("#writer-id", "robot")
+    assert page.is_disabled("#begin")  # reserved for the robot's samples
+    page.fill("#writer-id", "w9")
+    page.click("#begin")
+    with page.expect_download() as download:
+        write_word(page, 0, lift=True)
+        assert "marked" in page.text_content("#message")
+        page.click("#next")
+    doc = json.loads(Path(download.value.path()).read_text())
+    (sample,) = doc["samples"]
+    assert sample["lifted"] is True and len(sample["strokes"]) == 2
+    assert sample["strokes"][1][0][2] > sample["strokes"][0][-1][2]  # one clock per word
+    recordings = tmp_path / "rec"
+    recordings.mkdir()
+    (recordings / "w9.json").write_text(json.dumps(doc))
+    from studies.stimuli import load_human_samples
+
+    assert load_human_samples([recordings], ["cat"]).writers() == {"cat": []}
+    assert load_human_samples([recordings], ["cat"], accept_lifted=True).writers() == {
+        "cat": ["w9"]
+    }
+
+
+# ---------------------------------------------------------------------------- prg-study build
+def test_without_human_samples_the_build_says_what_is_missing(page, tmp_path, samples, capsys):
+    out = build(tmp_path / "b", "readability", robot=samples["robot"])
+    err = capsys.readouterr().err
+    assert "readability: NOT READY" in err and "capture/" in err
+    assert "missing: no human samples were given" in err
+    assert len(list((out / "stim").iterdir())) == len(WORDS)  # the robot's words
+    assert (out / "capture" / "index.html").is_file()
+    assert json.loads((out / "trials.json").read_text()) == {"rows": []}
+    page.goto((out / "index.html").as_uri())
+    assert "not ready" in page.text_content("#not-ready")
+    assert "human writers" in page.text_content("main ul")
+
+
+def test_some_human_samples_missing_is_an_error_on_request(tmp_path, samples, capsys):
+    args = [
+        "build",
+        str(REPO / "conf/study/turing.yaml"),
+        "--out",
+        str(tmp_path / "b"),
+        "-q",
+        "--robot",
+        str(samples["robot"]),
+        "--human",
+        str(samples["human"]),
+        "--set",
+        f"words=[{', '.join(WORDS)}]",
+        "--require-ready",
+    ]
+    assert main(args) == 2  # 5 writers, 10 wanted
+    err = capsys.readouterr().err
+    assert "missing: cat, dog, sun, egg, ink, owl: 5 of 10 human writers each" in err
+    assert (
+        err.strip().splitlines()[-1] == "prg-study: error: turing is not ready: 1 missing item(s)"
+    )
+
+
+TURING = "conf/study/turing.yaml"
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["build", "nope.yaml", "--out", "{out}"], "nope.yaml: no such study file"),
+        (["build", TURING, "--out", "{out}", "--set", "foils=x"], "foils must be an integer"),
+        (["build", TURING, "--out", "{out}", "--human", "/no"], "--human /no: no such folder"),
+        (["build", TURING, "--out", "{out}", "--robot", "/no"], "--robot /no: no such folder"),
+        (
+            [
+                "build",
+                TURING,
+                "--out",
+                "{out}",
+                "--robot",
+                "{robot}",
+                "--set",
+                "render.stroke_px=0",
+            ],
+            "render.stroke_px must be a positive number",
+        ),
+        (["build"], "the following arguments are required: config"),
+        (["build", TURING, "--bogus"], "unrecognized arguments: --bogus"),
+        ([], "choose a command: build"),
+    ],
+)
+def test_mistakes_are_one_line_with_exit_code_2(
+    tmp_path, samples, args, message, capsys, monkeypatch
+):
+    monkeypatch.chdir(REPO)
+    args = [a.format(out=tmp_path / "out", robot=samples["robot"]) for a in args]
+    try:
+        code = main(args)
+    except SystemExit as exit_:  # argparse's own errors
+        code = exit_.code
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.count("\n") == 1 and err.startswith("prg-study: error: ") and message in err
+    assert sorted(tmp_path.iterdir()) == []  # nothing half-written
+
+
+def test_a_failed_rebuild_leaves_the_previous_build_intact(tmp_path, samples, capsys):
+    out = build(tmp_path / "b", "turing", "participants=5", **samples)
+    before = (out / "trials.json").read_text()
+    broken = tmp_path / "broken"
+    broken.mkdir()
+    (broken / "x.json").write_text("{oops")
+    args = [
+        "build",
+        str(REPO / "conf/study/turing.yaml"),
+        "--out",
+        str(out),
+        "-q",
+        "--robot",
+        str(samples["robot"]),
+        "--human",
+        str(broken),
+        "--set",
+        f"words=[{', '.join(WORDS)}]",
+    ]
+    assert main(args) == 2
+    assert "x.json: not valid JSON" in capsys.readouterr().err
+    assert (out / "trials.json").read_text() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["b", "broken"]  # no temporary folders
+
+
+def test_the_module_runs_as_a_command(tmp_path):
+    result = subprocess.run(
+        [sys.executable, "-m", "studies.cli", "build", "missing.yaml"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=120,
+    )
+    assert result.returncode == 2
+    assert (
+        result.stderr
+        == "prg-study: error: missing.yaml: no such study file (e.g. conf/study/turing.yaml)\n"
+    )
