@@ -1,0 +1,531 @@
+"""Run every analysis of a study on checked responses; collect tidy tables and conclusions.
+
+:func:`analyze_turing` and :func:`analyze_readability` take the analysed rows (a long frame)
+and the options, and return a :class:`StudyAnalysis`: the tidy tables that become
+``tests.csv``, ``per_word.csv`` and ``per_participant.csv``, the mixed-model terms, the
+plain-language conclusions and a machine-readable ``verdict``. :func:`analyze_file` reads and
+checks a responses CSV first (:mod:`studies.analysis.validate`) and analyses each study in it.
+
+Primary analyses (what the conclusions rest on): study 1, H1 — GEE on participants (rate vs
+chance, and TOST of ``chance ± margin``); H2 — t-test on participant mean confidence
+(two-sided). Study 2 — paired tests on participants' success rates (difference, TOST,
+non-inferiority). The paper-faithful tests and the other recommended ones are reported beside
+them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from prg.errors import UsageError
+from studies.analysis import stats as S
+from studies.analysis.config import AnalysisConfig
+from studies.analysis.schema import READABILITY, TURING
+from studies.analysis.validate import (
+    Responses,
+    analysis_rows,
+    attention_summary,
+    check_responses,
+    load_responses,
+)
+
+PAPER = "paper-faithful"
+RECOMMENDED = "recommended"
+
+
+@dataclass
+class StudyAnalysis:
+    """The results of one study (see the module docstring)."""
+
+    kind: str
+    margin: float
+    config: AnalysisConfig
+    data: pd.DataFrame
+    tests: pd.DataFrame
+    per_word: pd.DataFrame
+    per_participant: pd.DataFrame
+    mixed: pd.DataFrame
+    icc: pd.DataFrame
+    conclusions: list[str]
+    verdict: dict
+    warnings: list[str] = field(default_factory=list)
+    contrasts: list[str] = field(default_factory=list)
+
+
+@dataclass
+class Analysis:
+    """A whole responses file analysed."""
+
+    source: str
+    config: AnalysisConfig
+    notes: list[str]
+    attention: pd.DataFrame
+    rows_in_file: int
+    studies: list[StudyAnalysis]
+
+
+def _tag(frame: pd.DataFrame, kind: str, approach: str, hypothesis: str) -> pd.DataFrame:
+    out = frame.copy()
+    out.insert(0, "hypothesis", hypothesis)
+    out.insert(0, "approach", approach)
+    out.insert(0, "study", kind)
+    return out
+
+
+def _row(tests: pd.DataFrame, name: str) -> pd.Series | None:
+    hit = tests[tests["test"] == name]
+    return hit.iloc[0] if len(hit) else None
+
+
+def _ok(row: pd.Series | None) -> bool:
+    return row is not None and np.isfinite(row["p_value"])
+
+
+def _ci(row: pd.Series, digits: int = 3) -> str:
+    return f"{row['estimate']:.{digits}f} (95 % CI {row['ci_low']:.{digits}f} to {row['ci_high']:.{digits}f})"
+
+
+def _p(p: float) -> str:
+    return "p = n/a" if not np.isfinite(p) else (f"p = {p:.2g}" if p < 0.001 else f"p = {p:.3f}")
+
+
+def analyze_turing(data: pd.DataFrame, cfg: AnalysisConfig) -> StudyAnalysis:
+    """Study 1: H1 (can participants pick the robot's sample above chance?) and H2 (confidence).
+
+    Parameters
+    ----------
+    data : DataFrame
+        Analysed rows: participant_id, word, chose_robot (0/1), confidence (1-5).
+    cfg : AnalysisConfig
+        chance, margin, alpha, neutral, margin_source, mixed_model.
+    """
+    c, a, margin = cfg.chance, cfg.alpha, cfg.margin_for(TURING)
+    neutral = cfg.neutral
+    h1, h2 = "H1: indistinguishable from chance", "H2: confidence not high"
+    parts = [
+        _tag(S.binomial_test(data, "chose_robot", c, "greater", a), TURING, PAPER, h1),
+        _tag(S.binomial_tost(data, "chose_robot", c, margin, a), TURING, PAPER, h1),
+        _tag(S.one_sample_ttest(data, "confidence", neutral, "greater", a), TURING, PAPER, h2),
+        _tag(
+            S.gee_rate(data, "chose_robot", "participant_id", c, margin, a), TURING, RECOMMENDED, h1
+        ),
+        _tag(
+            S.one_sample_ttest(
+                data, "confidence", neutral, "two-sided", a, cluster="participant_id"
+            ),
+            TURING,
+            RECOMMENDED,
+            h2,
+        ),
+        _tag(
+            S.signed_rank_test(data, "confidence", neutral, "participant_id", a),
+            TURING,
+            RECOMMENDED,
+            h2,
+        ),
+    ]
+    # cluster-level check on H1: participants' rates, one value each
+    rates = S.rates_by(data, "chose_robot", "participant_id", a)
+    prate = rates.rename(columns={"rate": "_r"})[["participant_id", "_r"]]
+    parts.append(
+        _tag(
+            S.one_sample_ttest(prate, "_r", c, "two-sided", a, cluster="participant_id").assign(
+                test=f"one-sample t-test vs {c:g} on participant rates"
+            ),
+            TURING,
+            RECOMMENDED,
+            h1,
+        )
+    )
+    mixed = (
+        S.mixed_logit(data, "chose_robot", "participant_id", "word", "1", a)
+        if cfg.mixed_model
+        else pd.DataFrame()
+    )
+    if len(mixed) and mixed["status"].iloc[0].startswith(("ok", "converged")):
+        icept = mixed.iloc[0]
+        off = S.logit(c)
+        z = (icept.post_mean - off) / icept.post_sd
+        from scipy import stats as st
+
+        p = float(2 * st.norm.sf(abs(z)))
+        parts.append(
+            _tag(
+                S.tests_frame(
+                    [
+                        dict(
+                            test="crossed mixed logit vs chance (typical participant and word)",
+                            null_hypothesis=f"rate = {c:g}",
+                            n=len(data),
+                            clusters=data["participant_id"].nunique(),
+                            estimate=icept.rate,
+                            ci_low=icept.rate_low,
+                            ci_high=icept.rate_high,
+                            ci_level=1 - a,
+                            statistic=z,
+                            p_value=p,
+                            alpha=a,
+                            reject=p < a,
+                            conclusion=(
+                                f"{'above' if z > 0 else 'below'} chance ({_p(p)})"
+                                if p < a
+                                else f"not shown to differ from chance ({_p(p)})"
+                            ),
+                            method="BinomialBayesMixedGLM.fit_vb, random intercepts for participants and words; "
+                            "approximate posterior (variational Bayes); conditional, not population-average, rate",
+                        )
+                    ]
+                ),
+                TURING,
+                RECOMMENDED,
+                h1,
+            )
+        )
+    tests = pd.concat(parts, ignore_index=True)
+
+    per_word = S.rates_by(data, "chose_robot", "word", a, chance=c)
+    conf_w = data.groupby("word")["confidence"].mean().rename("mean_confidence")
+    per_word = per_word.merge(conf_w, on="word", how="left")
+    per_word.insert(0, "study", TURING)
+    conf_p = data.groupby("participant_id")["confidence"].agg(
+        mean_confidence="mean", sd_confidence="std"
+    )
+    per_part = rates.merge(conf_p, on="participant_id", how="left")
+    per_part.insert(0, "study", TURING)
+    icc = pd.concat(
+        [S.icc_oneway(data, "chose_robot"), S.icc_oneway(data, "confidence")], ignore_index=True
+    )
+    icc.insert(0, "study", TURING)
+
+    warnings = S.margin_warnings(
+        margin, cfg.margin_source, S.margin_candidates(data, "chose_robot", "word", a)
+    )
+    verdict, conclusions, contrasts = _turing_verdict(tests, c, margin, neutral, a)
+    return StudyAnalysis(
+        TURING,
+        margin,
+        cfg,
+        data,
+        tests,
+        per_word,
+        per_part,
+        mixed,
+        icc,
+        conclusions,
+        verdict,
+        warnings,
+        contrasts,
+    )
+
+
+def _turing_verdict(tests: pd.DataFrame, c: float, margin: float, neutral: float, a: float):
+    gee = _row(tests, "GEE rate vs chance")
+    gee_tost = _row(tests, "GEE TOST vs chance")
+    fallback = _row(tests, f"one-sample t-test vs {c:g} on participant rates")
+    primary = gee if _ok(gee) else fallback
+    verdict: dict = {"study": TURING, "chance": c, "margin": margin, "alpha": a}
+    lines, contrasts = [], []
+    if _ok(primary):
+        est = float(primary["estimate"])
+        above = bool(primary["reject"] and est > c)
+        below = bool(primary["reject"] and est < c)
+        equiv = bool(_ok(gee_tost) and gee_tost["reject"]) if primary is gee else False
+        if equiv and not (above or below):
+            h1 = "equivalent to chance"
+        elif equiv:
+            h1 = f"equivalent to chance (a small difference, within ±{margin:g})"
+        elif above:
+            h1 = "above chance"
+        elif below:
+            h1 = "below chance"
+        else:
+            h1 = "inconclusive"
+        verdict.update(
+            h1=h1,
+            h1_equivalent=equiv,
+            above_chance=above,
+            below_chance=below,
+            rate=est,
+            rate_ci=[float(primary["ci_low"]), float(primary["ci_high"])],
+            h1_primary=primary["test"],
+        )
+        how = "GEE on participants" if primary is gee else "participant rates"
+        text = {
+            "equivalent to chance": f"**H1 supported**: participants picked the robot's sample at {_ci(primary)}, "
+            f"equivalent to chance {c:g} within ±{margin:g} ({how}; TOST {_p(gee_tost['p_value']) if _ok(gee_tost) else ''}).",
+            "above chance": f"**H1 not supported**: participants picked the robot's sample at {_ci(primary)}, "
+            f"above chance {c:g} ({how}, {_p(primary['p_value'])}): they can tell the robot's writing apart.",
+            "below chance": f"**H1 not supported as stated**: participants picked the robot's sample at {_ci(primary)}, "
+            f"*below* chance {c:g} ({how}, {_p(primary['p_value'])}): they took the robot's writing for a human's more often than a human's.",
+            "inconclusive": f"**H1 undecided**: the rate of picking the robot's sample, {_ci(primary)}, neither differs "
+            f"from chance {c:g} nor is shown equivalent within ±{margin:g} ({how}); more data are needed.",
+        }.get(h1, f"**H1**: {h1}: rate {_ci(primary)} ({how}).")
+        lines.append(text)
+        paper_tost = _row(tests, "exact binomial TOST vs chance")
+        if (
+            paper_tost is not None
+            and _ok(gee_tost)
+            and bool(paper_tost["reject"]) != bool(gee_tost["reject"])
+        ):
+            contrasts.append(
+                f"The exact binomial TOST that treats all trials as independent "
+                f"{'shows' if paper_tost['reject'] else 'does not show'} equivalence ({_p(paper_tost['p_value'])}); "
+                f"allowing for participants (GEE) it {'does' if gee_tost['reject'] else 'does not'} "
+                f"({_p(gee_tost['p_value'])})."
+            )
+    else:
+        verdict.update(h1="not estimable")
+        lines.append("**H1**: not estimable from these data (see the tests table).")
+    h2p = _row(tests, f"one-sample t-test vs {neutral:g} on participant means")
+    if _ok(h2p):
+        m = float(h2p["estimate"])
+        if h2p["reject"]:
+            h2 = "above neutral" if m > neutral else "below neutral"
+        else:
+            h2 = "not different from neutral"
+        verdict.update(
+            h2=h2, confidence_mean=m, confidence_ci=[float(h2p["ci_low"]), float(h2p["ci_high"])]
+        )
+        lines.append(
+            {
+                "above neutral": f"**H2 not supported**: mean confidence (participant means) {_ci(h2p, 2)} is above neutral {neutral:g} ({_p(h2p['p_value'])}).",
+                "below neutral": f"**H2 supported**: mean confidence (participant means) {_ci(h2p, 2)} is below neutral {neutral:g} ({_p(h2p['p_value'])}).",
+                "not different from neutral": f"**H2 undecided**: mean confidence (participant means) {_ci(h2p, 2)} is not shown to differ from neutral {neutral:g} ({_p(h2p['p_value'])}).",
+            }[h2]
+        )
+        paper_h2 = _row(tests, f"one-sample t-test vs {neutral:g} on ratings")
+        if paper_h2 is not None and _ok(paper_h2):
+            same = bool(paper_h2["reject"]) == bool(h2p["reject"] and m > neutral)
+            if not same:
+                contrasts.append(
+                    f"The paper's H2 test on all ratings as independent gives {_p(paper_h2['p_value'])} "
+                    f"(one-sided, 'mean <= {neutral:g}'); on participant means the evidence is "
+                    f"{_p(h2p['p_value'])} (two-sided): the conclusions differ."
+                )
+    else:
+        verdict.update(h2="not estimable")
+    return verdict, lines, contrasts
+
+
+def analyze_readability(data: pd.DataFrame, cfg: AnalysisConfig) -> StudyAnalysis:
+    """Study 2: is the robot's writing as readable as the human's?
+
+    Parameters
+    ----------
+    data : DataFrame
+        Analysed rows: participant_id, word, writer (human/robot), correct (0/1).
+    cfg : AnalysisConfig
+        margin, alpha, margin_source, mixed_model.
+    """
+    a, margin = cfg.alpha, cfg.margin_for(READABILITY)
+    hyp = "robot's words as readable as the human's"
+    parts = [
+        _tag(
+            S.group_ttest(data, "correct", "writer", "word", ("human", "robot"), a),
+            READABILITY,
+            PAPER,
+            hyp,
+        ),
+        _tag(
+            S.paired_tests(
+                data, "correct", "writer", "participant_id", ("human", "robot"), margin, a
+            ),
+            READABILITY,
+            RECOMMENDED,
+            hyp,
+        ),
+        _tag(
+            S.gee_difference(
+                data, "correct", "writer", "participant_id", ("human", "robot"), margin, a
+            ),
+            READABILITY,
+            RECOMMENDED,
+            hyp,
+        ),
+        _tag(
+            S.paired_tests(data, "correct", "writer", "word", ("human", "robot"), margin, a),
+            READABILITY,
+            RECOMMENDED,
+            hyp,
+        ),
+    ]
+    mixed = (
+        S.mixed_logit(data, "correct", "participant_id", "word", "C(writer, Treatment('human'))", a)
+        if cfg.mixed_model
+        else pd.DataFrame()
+    )
+    if len(mixed) and mixed["status"].iloc[0].startswith(("ok", "converged")) and len(mixed) > 1:
+        eff = mixed.iloc[1]
+        z = eff.post_mean / eff.post_sd
+        from scipy import stats as st
+
+        p = float(2 * st.norm.sf(abs(z)))
+        parts.append(
+            _tag(
+                S.tests_frame(
+                    [
+                        dict(
+                            test="crossed mixed logit: writer effect (robot vs human, log-odds)",
+                            null_hypothesis="log-odds ratio = 0",
+                            n=len(data),
+                            clusters=data["participant_id"].nunique(),
+                            estimate=eff.post_mean,
+                            ci_low=eff.ci_low,
+                            ci_high=eff.ci_high,
+                            ci_level=1 - a,
+                            statistic=z,
+                            p_value=p,
+                            alpha=a,
+                            reject=p < a,
+                            conclusion=(
+                                f"robot {'more' if z > 0 else 'less'} readable ({_p(p)})"
+                                if p < a
+                                else f"difference not shown ({_p(p)})"
+                            ),
+                            method="BinomialBayesMixedGLM.fit_vb, random intercepts for participants and words; approximate posterior",
+                        )
+                    ]
+                ),
+                READABILITY,
+                RECOMMENDED,
+                hyp,
+            )
+        )
+    tests = pd.concat(parts, ignore_index=True)
+
+    per_word = S.rates_by(data, "correct", ["word", "writer"], a)
+    per_word.insert(0, "study", READABILITY)
+    pw = S.rates_by(data, "correct", ["participant_id", "writer"], a)
+    wide = pw.pivot_table(index="participant_id", columns="writer", values=["n", "rate"])
+    per_part = pd.DataFrame(index=wide.index)
+    for w in ("human", "robot"):
+        if ("rate", w) in wide:
+            per_part[f"n_{w}"] = wide[("n", w)]
+            per_part[f"rate_{w}"] = wide[("rate", w)]
+    if {"rate_human", "rate_robot"} <= set(per_part.columns):
+        per_part["difference"] = per_part["rate_robot"] - per_part["rate_human"]
+    overall = S.rates_by(data, "correct", "participant_id", a)
+    per_part = overall.merge(per_part.reset_index(), on="participant_id", how="left")
+    if "list_id" in data:
+        per_part = per_part.merge(
+            data.groupby("participant_id")["list_id"].first(), on="participant_id", how="left"
+        )
+    per_part.insert(0, "study", READABILITY)
+    icc = S.icc_oneway(data, "correct")
+    icc.insert(0, "study", READABILITY)
+    diff = _row(tests, "paired t-test by participant (robot - human)")
+    cands = {}
+    if _ok(diff):
+        cands = {
+            "the CI half-width of the difference": float(diff["ci_high"] - diff["estimate"]),
+            "the observed difference": abs(float(diff["estimate"])),
+        }
+    warnings = S.margin_warnings(margin, cfg.margin_source, cands)
+    verdict, conclusions, contrasts = _readability_verdict(tests, margin, a)
+    return StudyAnalysis(
+        READABILITY,
+        margin,
+        cfg,
+        data,
+        tests,
+        per_word,
+        per_part,
+        mixed,
+        icc,
+        conclusions,
+        verdict,
+        warnings,
+        contrasts,
+    )
+
+
+def _readability_verdict(tests: pd.DataFrame, margin: float, a: float):
+    diff = _row(tests, "paired t-test by participant (robot - human)")
+    tost = _row(tests, f"paired TOST by participant (±{margin:g})")
+    ni = _row(tests, f"non-inferiority by participant (margin {margin:g})")
+    verdict: dict = {"study": READABILITY, "margin": margin, "alpha": a}
+    lines, contrasts = [], []
+    if not _ok(diff):
+        gee = _row(tests, "GEE difference (robot - human)")
+        verdict.update(verdict="not estimable")
+        lines.append(
+            "**Readability**: the paired analysis is not estimable from these data"
+            + (f"; GEE difference {_ci(gee)}." if _ok(gee) else ".")
+        )
+        return verdict, lines, contrasts
+    d = float(diff["estimate"])
+    equiv = bool(_ok(tost) and tost["reject"])
+    noninf = bool(_ok(ni) and ni["reject"])
+    sig = bool(diff["reject"])
+    if equiv:
+        v = "equally readable"
+    elif sig:
+        v = "robot more readable" if d > 0 else "robot less readable"
+    elif noninf:
+        v = "non-inferior"
+    else:
+        v = "inconclusive"
+    verdict.update(
+        verdict=v,
+        equivalent=equiv,
+        noninferior=noninf,
+        different=sig,
+        difference=d,
+        difference_ci=[float(diff["ci_low"]), float(diff["ci_high"])],
+    )
+    head = f"robot minus human success rate {_ci(diff)} (paired by participant)"
+    lines.append(
+        {
+            "equally readable": f"**Equally readable**: {head}; equivalence within ±{margin:g} shown (TOST {_p(tost['p_value'])}).",
+            "robot more readable": f"**The robot's words are more readable**: {head}, {_p(diff['p_value'])}.",
+            "robot less readable": f"**The robot's words are less readable**: {head}, {_p(diff['p_value'])}"
+            + (
+                f"; still non-inferior at −{margin:g} ({_p(ni['p_value'])})."
+                if noninf
+                else f"; non-inferiority at −{margin:g} not shown."
+            ),
+            "non-inferior": f"**Non-inferior, equivalence not shown**: {head}; the robot is not worse by {margin:g} or more "
+            f"(non-inferiority {_p(ni['p_value'])}), but equivalence within ±{margin:g} is not shown (TOST {_p(tost['p_value'])}).",
+            "inconclusive": f"**Undecided**: {head}; neither a difference ({_p(diff['p_value'])}), equivalence (TOST "
+            f"{_p(tost['p_value'])}) nor non-inferiority ({_p(ni['p_value'])}) is shown.",
+        }[v]
+    )
+    paper = _row(tests, "independent t-test on word rates (robot - human)")
+    if _ok(paper) and not paper["reject"] and not equiv:
+        contrasts.append(
+            f"The paper's independent t-test on word rates does not reject 'no difference' ({_p(paper['p_value'])}); "
+            f"read as the paper did, that would 'accept' equality, but equivalence within ±{margin:g} is not shown here."
+        )
+    return verdict, lines, contrasts
+
+
+def analyze_file(path: str, cfg: AnalysisConfig) -> Analysis:
+    """Read, check and analyse a responses CSV (every study it holds, or ``cfg.kind`` only)."""
+    return _analyze(load_responses(path, kind=cfg.kind, n_options=cfg.n_options), cfg)
+
+
+def analyze_table(table: pd.DataFrame, cfg: AnalysisConfig, name: str = "responses") -> Analysis:
+    """Check and analyse a responses table in memory (e.g. straight from the simulator)."""
+    return _analyze(check_responses(table, name, kind=cfg.kind, n_options=cfg.n_options), cfg)
+
+
+def _analyze(resp: Responses, cfg: AnalysisConfig) -> Analysis:
+    notes = list(cfg.notes) + list(resp.notes)
+    studies = []
+    att = attention_summary(resp.frame)
+    for kind in resp.kinds:
+        frame = resp.frame[resp.frame["study"] == kind]
+        used, ex_notes = analysis_rows(
+            frame,
+            include_attention_rows=cfg.include_attention_rows,
+            exclude_failed=cfg.exclude_failed_attention,
+        )
+        notes += [f"{kind}: {n}" for n in ex_notes]
+        if used.empty:
+            raise UsageError(f"{resp.path}: no {kind} rows left to analyse after exclusions")
+        fn = analyze_turing if kind == TURING else analyze_readability
+        studies.append(fn(used, cfg))
+    return Analysis(resp.path, cfg, notes, att, len(resp.frame), studies)

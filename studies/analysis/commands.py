@@ -1,0 +1,492 @@
+"""``prg-study analyze | power | simulate``: the analysis sub-commands of the ``prg-study`` entry point.
+
+The entry point (``studies/cli.py``) calls :func:`register` on its sub-parsers and then
+``args.func(args)``; every handler returns an exit code and raises
+:class:`prg.errors.UsageError` for bad input (the entry point prints it as one line, exit 2).
+``python -m studies.analysis.commands ...`` runs the same sub-commands without the entry point.
+
+Usage::
+
+    prg-study analyze RESPONSES.csv [--study conf/study/turing.yaml] [--out DIR]
+                      [--margin M] [--alpha A] [--chance C] [--margin-source preregistered|data]
+                      [--kind turing|readability] [--include-attention-rows] [--keep-inattentive] [--no-mixed]
+    prg-study power turing [--margin 0.05] [--rate 0.2 0.22] [--power 0.8 0.9] [--words 10 20]
+                           [--icc 0.1] [--word-icc 0.005] [--trials 500] [--out plan.csv]
+    prg-study power readability [--margin 0.1] [--rate 0.8] [--difference 0 0.05] [--power 0.8 0.9]
+                                [--words 10] [--icc 0.1] [--participants 30] [--out plan.csv]
+    prg-study simulate turing|readability --participants N --true-rate R [--human-rate R]
+                       [--icc 0.1] [--word-icc 0] [--seed S] --out responses.csv
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+from prg.errors import PRGError, UsageError
+
+KINDS = ("turing", "readability")
+
+
+def _rate(value: str) -> float:
+    try:
+        x = float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{value!r} is not a number") from None
+    if not (math.isfinite(x) and 0 < x < 1):
+        raise argparse.ArgumentTypeError(f"{value} is outside (0, 1)")
+    return x
+
+
+def _share(value: str) -> float:
+    try:
+        x = float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{value!r} is not a number") from None
+    if not (math.isfinite(x) and 0 <= x < 1):
+        raise argparse.ArgumentTypeError(f"{value} is outside [0, 1)")
+    return x
+
+
+def _positive_int(value: str) -> int:
+    try:
+        x = int(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{value!r} is not a whole number") from None
+    if x < 1:
+        raise argparse.ArgumentTypeError(f"{value} must be at least 1")
+    return x
+
+
+def _count(value: str) -> int:
+    try:
+        x = int(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{value!r} is not a whole number") from None
+    if x < 0:
+        raise argparse.ArgumentTypeError(f"{value} must be 0 or more")
+    return x
+
+
+def _confidence(value: str) -> float:
+    x = float(value) if value.replace(".", "", 1).isdigit() else math.nan
+    if not 1 < x < 5:
+        raise argparse.ArgumentTypeError(f"{value} is outside (1, 5)")
+    return x
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``analyze``, ``power`` and ``simulate`` sub-commands to ``subparsers``."""
+    a = subparsers.add_parser(
+        "analyze",
+        help="analyse a long-format responses CSV; write the report",
+        description="Check and analyse a responses CSV; write report.md/.html, tidy CSVs and figures.",
+    )
+    a.add_argument("responses", help="long-format responses CSV (one row per trial)")
+    a.add_argument(
+        "--study", metavar="YAML", help="study config (conf/study/turing.yaml or readability.yaml)"
+    )
+    a.add_argument(
+        "--out", metavar="DIR", help="report folder (default: reports/study/<responses name>)"
+    )
+    a.add_argument(
+        "--kind",
+        choices=KINDS,
+        help="analyse only this study's rows (default: the study column / config)",
+    )
+    a.add_argument(
+        "--margin", type=_rate, help="equivalence / non-inferiority margin (overrides the config)"
+    )
+    a.add_argument(
+        "--margin-source", choices=("preregistered", "data"), help="where the margin came from"
+    )
+    a.add_argument("--alpha", type=_rate, help="significance level (default 0.05)")
+    a.add_argument("--chance", type=_rate, help="chance rate of picking the robot (default 1/5)")
+    a.add_argument(
+        "--include-attention-rows", action="store_true", help="analyse attention-check rows too"
+    )
+    a.add_argument(
+        "--keep-inattentive",
+        action="store_true",
+        help="keep participants who failed an attention check",
+    )
+    a.add_argument("--no-mixed", action="store_true", help="skip the crossed mixed logit (faster)")
+    a.add_argument("--no-paper", action="store_true", help="leave out the paper-reproduction table")
+    a.set_defaults(func=run_analyze)
+
+    p = subparsers.add_parser(
+        "power",
+        help="sample-size planner for either study",
+        description="Power and sample size for the Turing-like test (equivalence to chance) or the "
+        "readability study (paired TOST / non-inferiority).",
+    )
+    p.add_argument("kind", choices=KINDS)
+    p.add_argument(
+        "--margin", type=_rate, help="equivalence margin (default 0.05 turing, 0.10 readability)"
+    )
+    p.add_argument(
+        "--rate",
+        type=_rate,
+        nargs="+",
+        help="true rate(s): turing P(pick robot) (default 0.20 0.22); readability human success (default 0.80)",
+    )
+    p.add_argument(
+        "--difference",
+        type=float,
+        nargs="+",
+        help="readability: true robot minus human (default 0 0.05)",
+    )
+    p.add_argument(
+        "--power",
+        type=_rate,
+        nargs="+",
+        default=[0.8, 0.9],
+        help="target power(s) (default 0.8 0.9)",
+    )
+    p.add_argument(
+        "--words",
+        type=_positive_int,
+        nargs="+",
+        help="words per participant (default 10 20 turing, 10 readability)",
+    )
+    p.add_argument(
+        "--icc", type=_share, help="participant share of the answers' variance (default 0.10)"
+    )
+    p.add_argument(
+        "--word-icc", type=_share, help="word share of the answers' variance (default 0.005)"
+    )
+    p.add_argument("--alpha", type=_rate, default=0.05)
+    p.add_argument("--chance", type=_rate, default=0.2, help="turing: chance rate (default 0.2)")
+    p.add_argument(
+        "--trials",
+        type=_positive_int,
+        nargs="+",
+        help="turing: also print power at these numbers of trials (default 500)",
+    )
+    p.add_argument(
+        "--participants",
+        type=_positive_int,
+        nargs="+",
+        help="readability: also print power at these sizes (default 30)",
+    )
+    p.add_argument("--out", metavar="CSV", help="write the plan as a CSV too")
+    p.set_defaults(func=run_power)
+
+    s = subparsers.add_parser(
+        "simulate",
+        help="simulated participants with known truth, as a responses CSV",
+        description="Draw simulated participants from a crossed logit model with known truth; write "
+        "a responses CSV in the exact schema and the truth as JSON next to it.",
+    )
+    s.add_argument("kind", choices=KINDS)
+    s.add_argument("--participants", type=_positive_int, required=True)
+    s.add_argument(
+        "--true-rate",
+        type=_rate,
+        required=True,
+        help="turing: population P(pick the robot); readability: the robot's success rate",
+    )
+    s.add_argument(
+        "--human-rate",
+        type=_rate,
+        help="readability: the human's success rate (default: = --true-rate)",
+    )
+    s.add_argument(
+        "--icc",
+        type=_share,
+        default=0.0,
+        help="participant share of the answers' variance (default 0)",
+    )
+    s.add_argument(
+        "--word-icc",
+        type=_share,
+        default=0.0,
+        help="word share of the answers' variance (default 0)",
+    )
+    s.add_argument(
+        "--words", help="comma-separated words, or a number of words (default: 10 words)"
+    )
+    s.add_argument("--study", metavar="YAML", help="study config to take the words from")
+    s.add_argument(
+        "--confidence-mean",
+        type=_confidence,
+        default=3.0,
+        help="turing: population mean confidence (default 3)",
+    )
+    s.add_argument(
+        "--confidence-icc",
+        type=_share,
+        default=0.1,
+        help="turing: participant share of confidence (default 0.1)",
+    )
+    s.add_argument(
+        "--attention-checks",
+        type=_count,
+        default=1,
+        help="attention-check trials per participant (default 1)",
+    )
+    s.add_argument(
+        "--inattentive",
+        type=_count,
+        default=0,
+        help="extra participants who answer at random and fail the checks",
+    )
+    s.add_argument("--seed", type=int, default=0)
+    s.add_argument(
+        "--out",
+        required=True,
+        metavar="CSV",
+        help="responses CSV to write (truth: <name>.truth.json)",
+    )
+    s.set_defaults(func=run_simulate)
+
+
+def run_analyze(args: argparse.Namespace) -> int:
+    """``prg-study analyze``: check, analyse, write the report folder; print where it went."""
+    from studies.analysis.analyze import analyze_file
+    from studies.analysis.config import load_config, with_overrides
+    from studies.analysis.report import write_report
+
+    cfg = load_config(args.study)
+    cfg = with_overrides(
+        cfg,
+        kind=args.kind,
+        margin=args.margin,
+        margin_source=args.margin_source,
+        alpha=args.alpha,
+        chance=args.chance,
+        include_attention_rows=True if args.include_attention_rows else None,
+        exclude_failed_attention=False if args.keep_inattentive else None,
+        mixed_model=False if args.no_mixed else None,
+    )
+    out = Path(args.out) if args.out else Path("reports") / "study" / Path(args.responses).stem
+    analysis = analyze_file(args.responses, cfg)
+    write_report(analysis, out, paper=not args.no_paper)
+    for st in analysis.studies:
+        for line in st.conclusions:
+            print(f"{st.kind}: {line.replace('**', '')}")
+        for w in st.warnings:
+            print(f"{st.kind}: warning: {w}")
+    print(f"report: {out / 'report.html'}")
+    return 0
+
+
+def _print_table(frame, columns: list[str]) -> None:
+    import pandas as pd
+
+    view = frame[columns].copy()
+    for c in view.columns:
+        if pd.api.types.is_float_dtype(view[c]):
+            view[c] = view[c].map(
+                lambda x: (
+                    "–"
+                    if x != x
+                    else (f"{x:.0f}" if float(x).is_integer() and abs(x) > 1 else f"{x:.3g}")
+                )
+            )
+    print(view.to_string(index=False))
+
+
+def run_power(args: argparse.Namespace) -> int:
+    """``prg-study power``: print (and optionally write) the sample-size table."""
+    import pandas as pd
+
+    from studies.analysis import power as P
+
+    icc = P.DEFAULT_ICC if args.icc is None else args.icc
+    word_icc = P.DEFAULT_WORD_ICC if args.word_icc is None else args.word_icc
+    if icc + word_icc >= 0.95:
+        raise UsageError(f"--icc {icc} plus --word-icc {word_icc} must stay below 0.95")
+    if args.kind == "turing":
+        margin = 0.05 if args.margin is None else args.margin
+        if not (args.chance - margin > 0 and args.chance + margin < 1):
+            raise UsageError(f"--chance {args.chance} ± --margin {margin} must stay inside (0, 1)")
+        plan = P.turing_plan(
+            args.rate or [0.20, 0.22],
+            args.power,
+            args.chance,
+            margin,
+            args.alpha,
+            args.words or [10, 20],
+            icc,
+            word_icc,
+        )
+        at = P.turing_power_at(
+            args.trials or [500], args.rate or [0.20, 0.22], args.chance, margin, args.alpha
+        )
+        print(
+            f"Study 1: exact binomial TOST of chance {args.chance:g} ± {margin:g} (alpha {args.alpha:g}); "
+            f"participants for icc {icc:g}, word_icc {word_icc:g}"
+        )
+        _print_table(
+            plan,
+            [
+                "true_rate",
+                "target_power",
+                "trials",
+                "trials_first",
+                "words",
+                "participants",
+                "power_achieved",
+            ],
+        )
+        print()
+        _print_table(at, ["trials", "true_rate", "power"])
+        unreachable = plan[plan["trials"].isna()]
+        if len(unreachable):
+            print(
+                f"(no sample size: a true rate outside chance ± {margin:g} can never be shown equivalent)"
+            )
+    else:
+        margin = 0.10 if args.margin is None else args.margin
+        words = (args.words or [10])[0]
+        if words < 2:
+            raise UsageError(
+                f"--words {words}: readability needs at least 2 words (half per writer)"
+            )
+        diffs = args.difference if args.difference is not None else [0.0, 0.05]
+        rates = args.rate or [0.80]
+        for r in rates:
+            for d in diffs:
+                if not 0 < r + d < 1:
+                    raise UsageError(f"--rate {r} plus --difference {d} is outside (0, 1)")
+        plan = P.readability_plan(
+            rates, diffs, args.power, margin, args.alpha, words, icc, word_icc
+        )
+        at = pd.concat(
+            [
+                P.readability_power_at(
+                    args.participants or [30], r, d, margin, args.alpha, words, icc, word_icc
+                )
+                for r in rates
+                for d in diffs
+            ],
+            ignore_index=True,
+        )
+        print(
+            f"Study 2: paired TOST ±{margin:g} and non-inferiority (alpha {args.alpha:g}); "
+            f"{words // 2} words per writer, icc {icc:g}, word_icc {word_icc:g}"
+        )
+        _print_table(
+            plan,
+            [
+                "test",
+                "human_rate",
+                "robot_rate",
+                "target_power",
+                "sd_difference",
+                "participants",
+                "power_achieved",
+            ],
+        )
+        print()
+        _print_table(
+            at, ["participants", "human_rate", "robot_rate", "power_tost", "power_noninferiority"]
+        )
+    if args.out:
+        out = Path(args.out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        plan.to_csv(out, index=False)
+        print(f"plan: {out}")
+    return 0
+
+
+def _words(args: argparse.Namespace) -> list[str]:
+    from studies.analysis.config import load_config
+    from studies.analysis.simulate import DEFAULT_WORDS
+
+    if args.words:
+        text = args.words.strip()
+        if text.isdigit():
+            n = int(text)
+            if n < 2:
+                raise UsageError(f"--words {text}: give at least 2 words")
+            base = list(DEFAULT_WORDS)
+            return (
+                base[:n]
+                if n <= len(base)
+                else base + [f"word{i:02d}" for i in range(len(base) + 1, n + 1)]
+            )
+        words = [w.strip() for w in text.split(",") if w.strip()]
+        if len(words) < 2 or len(set(words)) != len(words):
+            raise UsageError(
+                f"--words {args.words!r}: give at least 2 different comma-separated words"
+            )
+        return words
+    if args.study:
+        cfg = load_config(args.study)
+        if cfg.words:
+            return list(cfg.words)
+    return list(DEFAULT_WORDS)
+
+
+def run_simulate(args: argparse.Namespace) -> int:
+    """``prg-study simulate``: write a simulated responses CSV and its truth JSON."""
+    from studies.analysis.simulate import simulate_readability, simulate_turing
+
+    if args.icc + args.word_icc >= 0.95:
+        raise UsageError(f"--icc {args.icc} plus --word-icc {args.word_icc} must stay below 0.95")
+    words = _words(args)
+    common = dict(
+        icc=args.icc,
+        word_icc=args.word_icc,
+        words=words,
+        attention_checks=args.attention_checks,
+        inattentive=args.inattentive,
+        seed=args.seed,
+    )
+    if args.kind == "turing":
+        if args.human_rate is not None:
+            raise UsageError(
+                "--human-rate is for the readability study; turing takes --true-rate only"
+            )
+        frame, truth = simulate_turing(
+            args.participants,
+            args.true_rate,
+            confidence_mean=args.confidence_mean,
+            confidence_icc=args.confidence_icc,
+            **common,
+        )
+    else:
+        frame, truth = simulate_readability(
+            args.participants, args.true_rate, args.human_rate, **common
+        )
+    out = Path(args.out)
+    if out.suffix.lower() != ".csv":
+        raise UsageError(f"--out {out}: expected a .csv file name")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(f".{out.name}.tmp")
+    frame.to_csv(tmp, index=False)
+    tmp.replace(out)
+    truth_path = out.with_suffix(".truth.json")
+    truth_path.write_text(json.dumps(truth.to_dict(), indent=2) + "\n", encoding="utf-8")
+    print(
+        f"{len(frame)} rows from {args.participants + args.inattentive} participants: {out} (truth: {truth_path})"
+    )
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Stand-alone runner (``python -m studies.analysis.commands``) with one-line errors."""
+
+    class _Parser(argparse.ArgumentParser):
+        def error(self, message: str):  # one line, exit 2
+            print(f"{self.prog}: error: {' '.join(message.split())}", file=sys.stderr)
+            raise SystemExit(2)
+
+    parser = _Parser(prog="prg-study")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    register(sub)
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except PRGError as err:
+        print(f"prg-study: error: {' '.join(str(err).split())}", file=sys.stderr)
+        return err.exit_code
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,738 @@
+"""The analysis report: Markdown and self-contained HTML, figures, tidy CSVs — written atomically.
+
+:func:`write_report` turns an :class:`~studies.analysis.analyze.Analysis` into a folder::
+
+    report.md            the report (figures linked from figures/)
+    report.html          the same report, figures embedded as base64 PNG (one file to send)
+    tests.csv            one row per test: study, approach, hypothesis, estimate, CI, statistic, p, conclusion
+    per_word.csv         per-word rates with Wilson CIs (study 1: p vs chance, Holm-adjusted)
+    per_participant.csv  per-participant rates with CIs (+ confidence / per-writer rates), attention checks
+    mixed_model.csv      crossed mixed-logit terms (or why the fit failed)
+    paper_reproduction.csv  the paper's numbers reproduced from its summaries
+    metrics.json         the verdicts, machine-readable
+    figures/*.png
+
+Everything is written into a temporary folder next to ``out`` and renamed into place, so a
+failed run leaves the previous report untouched.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+import os
+import re
+import shutil
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from prg.errors import UsageError
+from studies.analysis.analyze import Analysis, StudyAnalysis
+from studies.analysis.schema import TURING
+
+REPORT_FILES = ("report.md", "report.html", "tests.csv")
+
+
+# --------------------------------------------------------------------------- a tiny document model
+
+
+@dataclass
+class Doc:
+    """Blocks rendered to both Markdown and HTML (text may use **bold**, *italic*, `code`)."""
+
+    title: str
+    blocks: list[tuple] = field(default_factory=list)
+
+    def h(self, level: int, text: str) -> None:
+        self.blocks.append(("h", level, text))
+
+    def p(self, text: str) -> None:
+        self.blocks.append(("p", text))
+
+    def ul(self, items: list[str]) -> None:
+        if items:
+            self.blocks.append(("ul", list(items)))
+
+    def warn(self, text: str) -> None:
+        self.blocks.append(("warn", text))
+
+    def table(self, frame: pd.DataFrame, caption: str = "") -> None:
+        self.blocks.append(("table", frame.astype(str), caption))
+
+    def figure(self, name: str, png: bytes, caption: str) -> None:
+        self.blocks.append(("fig", name, png, caption))
+
+    def markdown(self) -> str:
+        out = [f"# {self.title}", ""]
+        for b in self.blocks:
+            kind = b[0]
+            if kind == "h":
+                out += ["#" * b[1] + " " + b[2], ""]
+            elif kind == "p":
+                out += [b[1], ""]
+            elif kind == "ul":
+                out += [f"- {item}" for item in b[1]] + [""]
+            elif kind == "warn":
+                out += [f"> **Warning:** {b[1]}", ""]
+            elif kind == "table":
+                frame, caption = b[1], b[2]
+                if caption:
+                    out += [f"*{caption}*", ""]
+                cells = [[_md_cell(c) for c in frame.columns]] + [
+                    [_md_cell(v) for v in row] for row in frame.itertuples(index=False)
+                ]
+                out.append("| " + " | ".join(cells[0]) + " |")
+                out.append("|" + "|".join("---" for _ in cells[0]) + "|")
+                out += ["| " + " | ".join(r) + " |" for r in cells[1:]]
+                out.append("")
+            elif kind == "fig":
+                out += [f"![{b[3]}](figures/{b[1]})", "", f"*{b[3]}*", ""]
+        return "\n".join(out).rstrip() + "\n"
+
+    def html(self) -> str:
+        body = [f"<h1>{_inline(self.title)}</h1>"]
+        for b in self.blocks:
+            kind = b[0]
+            if kind == "h":
+                body.append(f"<h{b[1]}>{_inline(b[2])}</h{b[1]}>")
+            elif kind == "p":
+                body.append(f"<p>{_inline(b[1])}</p>")
+            elif kind == "ul":
+                body.append("<ul>" + "".join(f"<li>{_inline(i)}</li>" for i in b[1]) + "</ul>")
+            elif kind == "warn":
+                body.append(f'<p class="warn"><strong>Warning:</strong> {_inline(b[1])}</p>')
+            elif kind == "table":
+                frame, caption = b[1], b[2]
+                cap = f"<caption>{_inline(caption)}</caption>" if caption else ""
+                head = "".join(f"<th>{_inline(c)}</th>" for c in frame.columns)
+                rows = "".join(
+                    "<tr>" + "".join(f"<td>{_inline(v)}</td>" for v in row) + "</tr>"
+                    for row in frame.itertuples(index=False)
+                )
+                body.append(
+                    f"<table>{cap}<thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table>"
+                )
+            elif kind == "fig":
+                data = base64.b64encode(b[2]).decode("ascii")
+                body.append(
+                    f'<figure><img alt="{html.escape(b[3])}" src="data:image/png;base64,{data}">'
+                    f"<figcaption>{_inline(b[3])}</figcaption></figure>"
+                )
+        return (
+            '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+            f"<title>{html.escape(self.title)}</title><style>{_CSS}</style></head>\n<body>\n"
+            + "\n".join(body)
+            + "\n</body></html>\n"
+        )
+
+
+_CSS = (
+    "body{font-family:system-ui,sans-serif;max-width:60em;margin:2em auto;padding:0 1em;line-height:1.45;color:#222}"
+    "table{border-collapse:collapse;margin:0.5em 0 1.5em;font-size:0.88em}"
+    "th,td{border:1px solid #ccc;padding:0.25em 0.5em;text-align:left;vertical-align:top}"
+    "th{background:#f3f3f3}caption{caption-side:top;text-align:left;font-style:italic;padding:0.3em 0}"
+    "figure{margin:1em 0}img{max-width:100%}figcaption{font-style:italic;font-size:0.9em}"
+    ".warn{background:#fff4e0;border-left:4px solid #e69500;padding:0.5em}"
+    "code{background:#f3f3f3;padding:0 0.2em}"
+)
+
+
+def _md_cell(text: str) -> str:
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def _inline(text: str) -> str:
+    s = html.escape(str(text))
+    s = re.sub(r"`([^`]+)`", r"<code>\1</code>", s)
+    s = re.sub(r"\*\*([^*]+)\*\*", r"<strong>\1</strong>", s)
+    s = re.sub(r"(?<![\w*])\*([^*\s][^*]*)\*(?![\w*])", r"<em>\1</em>", s)
+    return s
+
+
+# --------------------------------------------------------------------------- formatting
+
+
+def fmt_p(p: float) -> str:
+    """A p value for people: 3 decimals, or 2 significant digits below 0.001."""
+    if p is None or not np.isfinite(p):
+        return "–"
+    return f"{p:.2g}" if p < 0.001 else f"{p:.3f}"
+
+
+def _num(x: float, digits: int = 3) -> str:
+    return "–" if x is None or not np.isfinite(x) else f"{x:.{digits}f}"
+
+
+def tests_table(tests: pd.DataFrame, digits: int = 3) -> pd.DataFrame:
+    """The human-readable view of a tests frame."""
+    rows = []
+    for r in tests.itertuples(index=False):
+        if np.isfinite(r.estimate):
+            hi = "∞" if r.ci_high == np.inf else _num(r.ci_high, digits)
+            est = (
+                f"{_num(r.estimate, digits)} [{_num(r.ci_low, digits)}, {hi}]"
+                if np.isfinite(r.ci_low)
+                else _num(r.estimate, digits)
+            )
+            lvl = f"{r.ci_level:.0%}" if np.isfinite(r.ci_level) else ""
+        else:
+            est, lvl = "–", ""
+        rows.append(
+            {
+                "approach": r.approach,
+                "test": r.test,
+                "n": ""
+                if not np.isfinite(r.n)
+                else f"{r.n:.0f}"
+                + (f" ({r.clusters:.0f} clusters)" if np.isfinite(r.clusters) else ""),
+                "estimate [CI]": est,
+                "CI": lvl,
+                "p": fmt_p(r.p_value),
+                "conclusion": r.conclusion,
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+# --------------------------------------------------------------------------- figures
+
+
+def _png(fig) -> bytes:
+    import io
+
+    import matplotlib.pyplot as plt
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return buf.getvalue()
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def fig_turing_words(
+    per_word: pd.DataFrame, chance: float, margin: float, overall: tuple[float, float, float] | None
+):
+    """Per-word rates of picking the robot, Wilson CIs, chance and the equivalence band."""
+    plt = _plt()
+    pw = per_word.sort_values("rate")
+    fig, ax = plt.subplots(figsize=(6.4, 0.35 * len(pw) + 1.6))
+    y = np.arange(len(pw))
+    ax.axvspan(
+        chance - margin,
+        chance + margin,
+        color="#cfe8cf",
+        label=f"equivalence band {chance:g} ± {margin:g}",
+    )
+    ax.axvline(chance, color="#2a7f2a", lw=1.2, label=f"chance {chance:g}")
+    if overall is not None:
+        est, lo, hi = overall
+        ax.axvspan(lo, hi, color="#d9d9f3", alpha=0.8)
+        ax.axvline(est, color="#33338f", lw=1.2, ls="--", label=f"overall (GEE) {est:.2f}")
+    ax.errorbar(
+        pw["rate"],
+        y,
+        xerr=[pw["rate"] - pw["ci_low"], pw["ci_high"] - pw["rate"]],
+        fmt="o",
+        color="black",
+        capsize=3,
+    )
+    ax.set_yticks(y, pw["word"].astype(str))
+    ax.set_xlim(0, 1)
+    ax.set_xlabel("rate of picking the robot's sample (95 % Wilson CI)")
+    ax.legend(loc="lower right", fontsize=8, frameon=False)
+    ax.set_title("Study 1: per-word detection rate against chance")
+    return fig
+
+
+def fig_turing_participants(per_part: pd.DataFrame, chance: float):
+    """Histogram of the participants' rates of picking the robot."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(6.4, 3.0))
+    bins = np.linspace(0, 1, 21)
+    ax.hist(per_part["rate"], bins=bins, color="#8899cc", edgecolor="white")
+    ax.axvline(chance, color="#2a7f2a", lw=1.2, label=f"chance {chance:g}")
+    ax.set_xlabel("participant's rate of picking the robot's sample")
+    ax.set_ylabel("participants")
+    ax.legend(frameon=False, fontsize=8)
+    ax.set_title("Study 1: participants' detection rates")
+    return fig
+
+
+def fig_confidence(data: pd.DataFrame, neutral: float):
+    """Confidence ratings (by whether the robot was picked) and participant mean confidence."""
+    plt = _plt()
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.2))
+    levels = np.arange(1, 6)
+    width = 0.4
+    for shift, (val, label, color) in zip(
+        (-width / 2, width / 2),
+        ((1.0, "picked the robot", "#33338f"), (0.0, "picked a human", "#b0b0b0")),
+    ):
+        counts = (
+            data.loc[data["chose_robot"] == val, "confidence"]
+            .value_counts()
+            .reindex(levels, fill_value=0)
+        )
+        a1.bar(levels + shift, counts.to_numpy(), width=width, label=label, color=color)
+    a1.set_xticks(levels, ["very\nlow", "low", "neutral", "high", "very\nhigh"])
+    a1.set_ylabel("ratings")
+    a1.legend(frameon=False, fontsize=8)
+    a1.set_title("Confidence ratings")
+    means = data.groupby("participant_id")["confidence"].mean()
+    a2.hist(means, bins=np.linspace(1, 5, 17), color="#8899cc", edgecolor="white")
+    a2.axvline(neutral, color="black", lw=1.2, label=f"neutral {neutral:g}")
+    a2.axvline(
+        means.mean(), color="#33338f", ls="--", lw=1.2, label=f"mean of means {means.mean():.2f}"
+    )
+    a2.set_xlabel("participant's mean confidence")
+    a2.set_ylabel("participants")
+    a2.legend(frameon=False, fontsize=8)
+    a2.set_title("One value per participant")
+    fig.tight_layout()
+    return fig
+
+
+def fig_readability(per_word: pd.DataFrame, data: pd.DataFrame):
+    """Success rate per writer (Wilson CI) and per word, human vs robot."""
+    from statsmodels.stats.proportion import proportion_confint
+
+    plt = _plt()
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.6), gridspec_kw={"width_ratios": [1, 2.2]})
+    colors = {"human": "#b07030", "robot": "#33338f"}
+    for i, w in enumerate(("human", "robot")):
+        y = data.loc[data["writer"] == w, "correct"]
+        if len(y) == 0:
+            continue
+        k, n = int(y.sum()), len(y)
+        lo, hi = proportion_confint(k, n, method="wilson")
+        a1.errorbar(
+            [i],
+            [k / n],
+            yerr=[[k / n - lo], [hi - k / n]],
+            fmt="o",
+            color=colors[w],
+            capsize=4,
+            ms=8,
+        )
+        prates = data[data["writer"] == w].groupby("participant_id")["correct"].mean()
+        jitter = np.random.default_rng(i).uniform(-0.12, 0.12, len(prates))
+        a1.scatter(i + 0.3 + jitter, prates, s=8, color=colors[w], alpha=0.35)
+    a1.set_xticks([0, 1], ["human", "robot"])
+    a1.set_xlim(-0.5, 1.7)
+    a1.set_ylim(-0.02, 1.02)
+    a1.set_ylabel("success rate (95 % Wilson CI; dots: participants)")
+    a1.set_title("Readability per writer")
+    wide = per_word.pivot_table(index="word", columns="writer", values="rate")
+    wide = wide.sort_values(wide.columns[0]) if len(wide.columns) else wide
+    x = np.arange(len(wide))
+    for w in ("human", "robot"):
+        if w in wide:
+            a2.plot(x, wide[w], "o", color=colors[w], label=w)
+    if {"human", "robot"} <= set(wide.columns):
+        a2.vlines(x, wide["human"], wide["robot"], color="#999999", lw=1)
+    a2.set_xticks(x, wide.index.astype(str), rotation=45, ha="right")
+    a2.set_ylim(-0.02, 1.02)
+    a2.set_ylabel("success rate")
+    a2.legend(frameon=False, fontsize=8)
+    a2.set_title("Per word: the same word in both writings")
+    fig.tight_layout()
+    return fig
+
+
+def fig_differences(per_part: pd.DataFrame, margin: float, diff: tuple[float, float, float] | None):
+    """Participants' robot-minus-human differences with the equivalence band."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(6.4, 3.0))
+    d = per_part["difference"].dropna() if "difference" in per_part else pd.Series(dtype=float)
+    ax.axvspan(-margin, margin, color="#cfe8cf", label=f"equivalence band ±{margin:g}")
+    ax.hist(d, bins=np.arange(-1.05, 1.06, 0.1), color="#8899cc", edgecolor="white")
+    ax.axvline(0, color="black", lw=0.8)
+    if diff is not None:
+        est, lo, hi = diff
+        ax.axvspan(
+            lo, hi, color="#33338f", alpha=0.25, zorder=3, label="90 % CI of the mean (TOST)"
+        )
+        ax.axvline(est, color="#33338f", lw=1.8, zorder=4, label=f"mean difference {est:+.3f}")
+    ax.set_xlabel("participant's success rate: robot minus human")
+    ax.set_ylabel("participants")
+    ax.legend(frameon=False, fontsize=8)
+    ax.set_title("Study 2: paired differences")
+    return fig
+
+
+# --------------------------------------------------------------------------- the report
+
+
+def _row(tests: pd.DataFrame, name: str):
+    hit = tests[tests["test"] == name]
+    return hit.iloc[0] if len(hit) else None
+
+
+def _study1_section(doc: Doc, st: StudyAnalysis) -> None:
+    cfg, c, m = st.config, st.config.chance, st.margin
+    d = st.data
+    doc.h(2, "Study 1: Turing-like test")
+    doc.p(
+        f"{d['participant_id'].nunique()} participants, {d['word'].nunique()} words, {len(d)} trials. On each trial a "
+        f"participant saw {cfg.n_options} samples of a word (one by the robot) and picked the one they thought the robot "
+        f"wrote, then rated their confidence 1-5. Guessing picks the robot with probability {c:g}. "
+        f"**H1** (indistinguishable): the rate is within {c:g} ± {m:g}. **H2** (low confidence): mean confidence is not "
+        f"above neutral ({cfg.neutral:g})."
+    )
+    for w in st.warnings:
+        doc.warn(w)
+    doc.h(3, "H1: can participants tell the robot's writing apart?")
+    h1 = st.tests[st.tests["hypothesis"].str.startswith("H1")]
+    doc.table(
+        tests_table(h1),
+        "Tests of H1. Paper-faithful rows treat all trials as independent; recommended rows allow for participants.",
+    )
+    gee = _row(st.tests, "GEE rate vs chance")
+    overall = (
+        (gee.estimate, gee.ci_low, gee.ci_high)
+        if gee is not None and np.isfinite(gee.estimate)
+        else None
+    )
+    doc.figure(
+        "turing_per_word.png",
+        _png(fig_turing_words(st.per_word, c, m, overall)),
+        "Rate of picking the robot's sample per word (95 % Wilson CIs, trials independent within a word); "
+        "green: chance and the equivalence band; blue: the overall GEE estimate and its 95 % CI.",
+    )
+    pw = st.per_word[
+        ["word", "n", "k", "rate", "ci_low", "ci_high", "p_vs_chance", "p_holm", "mean_confidence"]
+    ].copy()
+    for col in ("rate", "ci_low", "ci_high"):
+        pw[col] = pw[col].map(_num)
+    pw["p_vs_chance"] = pw["p_vs_chance"].map(fmt_p)
+    pw["p_holm"] = pw["p_holm"].map(fmt_p)
+    pw["mean_confidence"] = pw["mean_confidence"].map(lambda x: _num(x, 2))
+    doc.table(
+        pw,
+        "Per word: robot picks k of n, rate with 95 % Wilson CI, exact two-sided binomial test vs chance (Holm-adjusted over words).",
+    )
+    icc = st.icc.set_index("value")
+    if "chose_robot" in icc.index:
+        r = icc.loc["chose_robot"]
+        doc.p(
+            f"Answers cluster within participants: the ICC of the 0/1 answers is {_num(r.icc)} "
+            f"(design effect {_num(r.design_effect, 2)} for {_num(r.mean_cluster_size, 1)} trials per participant), "
+            f"so {len(d)} trials carry the information of about {len(d) / max(r.design_effect, 1):.0f} independent ones."
+        )
+    doc.figure(
+        "turing_participants.png",
+        _png(fig_turing_participants(st.per_participant, c)),
+        "Participants' own rates of picking the robot's sample.",
+    )
+    doc.h(3, "Crossed mixed logit (sensitivity analysis)")
+    _mixed(doc, st.mixed, "rate of a typical participant on a typical word")
+    doc.h(3, "H2: how confident were participants?")
+    h2 = st.tests[st.tests["hypothesis"].str.startswith("H2")]
+    doc.table(tests_table(h2, 2), "Tests of H2 against the neutral rating.")
+    if "confidence" in icc.index:
+        r = icc.loc["confidence"]
+        doc.p(
+            f"Ratings cluster within participants (ICC {_num(r.icc)}, design effect {_num(r.design_effect, 2)}): the "
+            "paper-faithful test's n counts every rating as a separate person; the recommended test uses one mean per "
+            "participant. Ratings are ordinal, so a signed-rank test on the participant means is shown as a check."
+        )
+    doc.figure(
+        "turing_confidence.png",
+        _png(fig_confidence(d, cfg.neutral)),
+        "Left: confidence ratings split by whether the robot's sample was picked. Right: participants' mean confidence.",
+    )
+
+
+def _mixed(doc: Doc, mixed: pd.DataFrame, what: str) -> None:
+    if mixed is None or mixed.empty:
+        doc.p("The crossed mixed logit was not fitted (`--no-mixed`).")
+        return
+    status = str(mixed["status"].iloc[0])
+    if status.startswith("failed"):
+        doc.warn(
+            f"The crossed mixed logit (participants x words) could not be fitted: {status[len('failed: ') :]}. "
+            "The GEE results above do not depend on it."
+        )
+        return
+    t = mixed.copy()
+    view = pd.DataFrame(
+        {
+            "term": t["term"],
+            "type": t["type"],
+            "posterior mean": t["post_mean"].map(_num),
+            "95 % interval": [f"[{_num(a)}, {_num(b)}]" for a, b in zip(t["ci_low"], t["ci_high"])],
+            "as a rate": [
+                f"{_num(r)} [{_num(a)}, {_num(b)}]" if np.isfinite(r) else ""
+                for r, a, b in zip(t["rate"], t["rate_low"], t["rate_high"])
+            ],
+        }
+    )
+    doc.table(
+        view,
+        "Crossed random intercepts for participants and words (BinomialBayesMixedGLM, variational Bayes).",
+    )
+    doc.p(
+        f"*Caveat*: this model is fitted by mean-field variational Bayes (statsmodels' `BinomialBayesMixedGLM.fit_vb`, "
+        f"priors N(0, 2²) on fixed effects and N(0, 1) on log random-effect SDs). Its intervals are approximate and "
+        f"typically too narrow, and its intercept is the {what}, not the population-average rate the GEE estimates. "
+        f"It is shown because it is the one analysis here that allows for word-to-word variation as well as "
+        f"participants; status: {status}."
+    )
+
+
+def _study2_section(doc: Doc, st: StudyAnalysis) -> None:
+    m = st.margin
+    d = st.data
+    doc.h(2, "Study 2: readability")
+    lists = d["list_id"].replace("", np.nan).dropna().unique() if "list_id" in d else []
+    doc.p(
+        f"{d['participant_id'].nunique()} participants typed the word they saw; {len(d)} trials over "
+        f"{d['word'].nunique()} words, each participant reading words by both writers"
+        + (
+            f" (lists {', '.join(map(str, sorted(lists)))} swap who wrote which word)"
+            if len(lists)
+            else ""
+        )
+        + f". The question is whether the robot's words are as readable as the human's: equivalence within ±{m:g} "
+        f"(TOST), or at least non-inferiority (robot ≥ human − {m:g})."
+    )
+    for w in st.warnings:
+        doc.warn(w)
+    doc.table(
+        tests_table(st.tests),
+        "Tests of readability (robot minus human). The paper-faithful test ignores the pairing.",
+    )
+    doc.figure(
+        "readability_per_writer.png",
+        _png(fig_readability(st.per_word, d)),
+        "Left: success rate per writer (95 % Wilson CI), dots are participants. Right: each word's success rate in both writings.",
+    )
+    tost = _row(st.tests, f"paired TOST by participant (±{m:g})")
+    diff = (
+        (tost.estimate, tost.ci_low, tost.ci_high)
+        if tost is not None and np.isfinite(tost.estimate)
+        else None
+    )
+    doc.figure(
+        "readability_differences.png",
+        _png(fig_differences(st.per_participant, m, diff)),
+        f"Participants' robot-minus-human differences; equivalence needs the 90 % CI inside ±{m:g}.",
+    )
+    pw = st.per_word.copy()
+    for col in ("rate", "ci_low", "ci_high"):
+        pw[col] = pw[col].map(_num)
+    doc.table(
+        pw[["word", "writer", "n", "k", "rate", "ci_low", "ci_high"]],
+        "Per word and writer: k of n typed correctly, rate with 95 % Wilson CI.",
+    )
+    doc.h(3, "Crossed mixed logit (sensitivity analysis)")
+    _mixed(
+        doc,
+        st.mixed,
+        "log-odds of a typical participant on a typical word (the writer term is the robot-vs-human log-odds ratio)",
+    )
+
+
+def _paper_section(doc: Doc, reproduced: pd.DataFrame | None, analysis: Analysis) -> None:
+    from studies.analysis.paper import WEAKNESSES
+
+    doc.h(2, "Where the paper's analysis was weak")
+    doc.p(
+        'The paper ("User Study on PRG against Human Calligraphy") reports summary numbers only. Re-running its tests '
+        "from those numbers reproduces its conclusions, and shows where the analysis falls short:"
+    )
+    doc.ul([f"**{head}** {body}" for head, body in WEAKNESSES])
+    contrasts = [c for st in analysis.studies for c in st.contrasts]
+    if contrasts:
+        doc.p(
+            "On the data analysed in this report, the paper's way of testing and the recommended one disagree:"
+        )
+        doc.ul(contrasts)
+    if reproduced is not None:
+        view = reproduced[["study", "quantity", "shown", "expected", "note"]].rename(
+            columns={"shown": "reproduced", "expected": "re-analysis (studies.md)"}
+        )
+        doc.table(
+            view,
+            "The paper's numbers reproduced from its summaries (data rebuilt to match them; see studies.analysis.paper).",
+        )
+
+
+def _methods(doc: Doc, analysis: Analysis) -> None:
+    import scipy
+    import statsmodels
+
+    cfg = analysis.config
+    doc.h(2, "Methods")
+    doc.ul(
+        [
+            "**Paper-faithful**: exact binomial test of the robot-pick rate against chance (one-sided), exact binomial "
+            "TOST on chance ± margin, one-sided t-test of all confidence ratings against neutral, and (study 2) an "
+            "independent two-sample t-test on the words' success rates. All treat trials as independent.",
+            "**GEE**: logit link with offset logit(chance), exchangeable working correlation within participants, "
+            "bias-reduced (Mancl-DeRouen) sandwich standard errors; TOST on the logit scale against "
+            "logit(chance ± margin). Study 2: identity link for the robot-minus-human difference.",
+            "**Participant-level tests**: one value per participant (mean confidence; rate; robot-minus-human "
+            "difference) in one-sample or paired t-tests (`scipy.stats`), the paired TOST with "
+            "`statsmodels.stats.weightstats.ttost_paired`, non-inferiority as a one-sided paired t-test against −margin. "
+            "By-word paired tests treat words as the unit instead.",
+            "**Crossed mixed logit**: random intercepts for participants and words, `BinomialBayesMixedGLM.fit_vb`.",
+            "**Equivalence**: shown when both one-sided nulls are rejected at alpha, i.e. when the 1 − 2·alpha CI lies "
+            "inside the margin. Not rejecting 'no difference' is never read as equality.",
+            f"**Options**: chance {cfg.chance:g}, alpha {cfg.alpha:g}, margin source {cfg.margin_source}"
+            + (f", config {cfg.source}" if cfg.source else "")
+            + f"; attention-check rows {'included' if cfg.include_attention_rows else 'excluded'}; participants failing "
+            f"an attention check {'excluded' if cfg.exclude_failed_attention else 'kept'}.",
+            f"Software: scipy {scipy.__version__}, statsmodels {statsmodels.__version__}.",
+        ]
+    )
+    doc.p(
+        "Files: `tests.csv` (one row per test), `per_word.csv`, `per_participant.csv`, `mixed_model.csv`, "
+        "`paper_reproduction.csv`, `metrics.json` (the verdicts), `figures/`."
+    )
+
+
+def build_report(analysis: Analysis, reproduced: pd.DataFrame | None = None) -> Doc:
+    """The report as a :class:`Doc` (render with ``.markdown()`` / ``.html()``)."""
+    name = analysis.config.name or "User-study analysis"
+    doc = Doc(f"{name}: {Path(analysis.source).name}")
+    doc.h(2, "Summary")
+    doc.ul([line for st in analysis.studies for line in st.conclusions])
+    doc.h(2, "Data")
+    att = analysis.attention
+    failed = att.loc[att["failed_any"], "participant_id"].tolist()
+    items = [
+        f"File `{analysis.source}`: {analysis.rows_in_file} rows, {att['participant_id'].nunique()} participants.",
+        f"Attention checks: {int(att['checks'].sum())} check trials; {len(failed)} participants failed at least one"
+        + (
+            f" ({', '.join(map(str, failed[:10]))}{' ...' if len(failed) > 10 else ''})."
+            if failed
+            else "."
+        ),
+    ]
+    items += [
+        f"Analysed ({st.kind}): {st.data['participant_id'].nunique()} participants, {len(st.data)} trials."
+        for st in analysis.studies
+    ]
+    items += analysis.notes
+    doc.ul(items)
+    for st in analysis.studies:
+        (_study1_section if st.kind == TURING else _study2_section)(doc, st)
+    _paper_section(doc, reproduced, analysis)
+    _methods(doc, analysis)
+    return doc
+
+
+def _csv(frames: list[pd.DataFrame], path: Path) -> None:
+    frames = [f for f in frames if f is not None and not f.empty]
+    (pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()).to_csv(path, index=False)
+
+
+def _jsonable(x):
+    if isinstance(x, dict):
+        return {k: _jsonable(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, float) and not np.isfinite(x):
+        return None
+    return x
+
+
+def write_report(analysis: Analysis, out: str | Path, *, paper: bool = True) -> Path:
+    """Write the report folder atomically (see the module docstring); returns ``out``.
+
+    Raises
+    ------
+    prg.errors.UsageError
+        ``out`` exists, is not empty and does not hold an earlier report.
+    """
+    out = Path(out)
+    if out.exists() and (
+        not out.is_dir() or (any(out.iterdir()) and not (out / "report.md").exists())
+    ):
+        raise UsageError(
+            f"--out {out}: exists and is not an earlier report folder; choose a new or empty folder"
+        )
+    out.parent.mkdir(parents=True, exist_ok=True)
+    from studies.analysis.paper import reproduce_paper
+
+    reproduced = reproduce_paper() if paper else None
+    doc = build_report(analysis, reproduced)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
+    try:
+        (tmp / "figures").mkdir()
+        for b in doc.blocks:
+            if b[0] == "fig":
+                (tmp / "figures" / b[1]).write_bytes(b[2])
+        (tmp / "report.md").write_text(doc.markdown(), encoding="utf-8")
+        (tmp / "report.html").write_text(doc.html(), encoding="utf-8")
+        tests = []
+        for st in analysis.studies:
+            tests.append(st.tests)
+        _csv(tests, tmp / "tests.csv")
+        _csv([st.per_word for st in analysis.studies], tmp / "per_word.csv")
+        parts = []
+        for st in analysis.studies:
+            pp = st.per_participant.merge(
+                analysis.attention.rename(
+                    columns={"checks": "attention_checks", "failed": "attention_failed"}
+                )[["participant_id", "study", "attention_checks", "attention_failed"]],
+                on=["participant_id", "study"],
+                how="left",
+            ).assign(excluded=False)
+            parts.append(pp)
+        excluded = analysis.attention[analysis.attention["failed_any"]]
+        if len(excluded) and analysis.config.exclude_failed_attention:
+            parts.append(
+                excluded.rename(
+                    columns={"checks": "attention_checks", "failed": "attention_failed"}
+                )[["study", "participant_id", "attention_checks", "attention_failed"]].assign(
+                    excluded=True
+                )
+            )
+        _csv(parts, tmp / "per_participant.csv")
+        _csv(
+            [
+                st.mixed.assign(study=st.kind)
+                for st in analysis.studies
+                if st.mixed is not None and len(st.mixed)
+            ],
+            tmp / "mixed_model.csv",
+        )
+        if reproduced is not None:
+            reproduced.to_csv(tmp / "paper_reproduction.csv", index=False)
+        metrics = {
+            "source": analysis.source,
+            "studies": {st.kind: _jsonable(st.verdict) for st in analysis.studies},
+            "warnings": [w for st in analysis.studies for w in st.warnings],
+        }
+        (tmp / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n", encoding="utf-8")
+        old = None
+        if out.exists():
+            old = out.with_name(f".{out.name}.old-{os.getpid()}")
+            out.rename(old)
+        tmp.rename(out)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return out
+
+
+__all__ = ["Doc", "build_report", "fmt_p", "tests_table", "write_report"]
