@@ -32,7 +32,7 @@ from importlib import resources
 from pathlib import Path
 
 import prg
-from studies.design import ROBOT, Row, StudyConfig, design_rows
+from studies.design import ROBOT, Row, StudyConfig, balance_notes, design_rows
 from studies.stimuli import (
     HumanSamples,
     RenderStyle,
@@ -42,6 +42,7 @@ from studies.stimuli import (
     load_robot_words,
     render_sample,
     save_png,
+    stand_ins,
     stimulus_name,
 )
 
@@ -78,17 +79,21 @@ class BuildReport:
     ----------
     out_dir : Path
     ready : bool
-        The questionnaire can run (every word has its human writers).
+        The questionnaire can run (every word has its human writers, or stand-ins in a
+        pilot build).
+    pilot : bool
+        Stand-ins replaced missing human samples: try the pages, do not collect data.
     missing : list of str
         What is missing before it can, one line each.
     notes : list of str
-        Human sample files or samples left out, and why.
+        Where counterbalancing is only near-exact; human samples left out, and why.
     n_stimuli : int
     app_version : str
     """
 
     out_dir: Path
     ready: bool
+    pilot: bool = False
     missing: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     n_stimuli: int = 0
@@ -200,6 +205,7 @@ def build_study(
     ckpt: str | Path | None = None,
     out_dir: str | Path | None = None,
     progress: Callable[[str], None] | None = None,
+    pilot: bool = False,
 ) -> BuildReport:
     """Build the study's web folder (see the module docstring).
 
@@ -219,6 +225,10 @@ def build_study(
         Default ``studies/<name>/build`` (relative to the working directory).
     progress : callable, optional
         Called with one line per step.
+    pilot : bool
+        Fill missing human samples with stand-ins made from the robot's
+        (:func:`studies.stimuli.stand_ins`) so the pages can be tried before the human writers
+        have written; the page shows a "pilot" banner and ``app_version`` ends in ``-pilot``.
 
     Returns
     -------
@@ -237,7 +247,7 @@ def build_study(
     shutil.rmtree(staging, ignore_errors=True)
     staging.mkdir()
     try:
-        report = _build_into(staging, config, style, human_dirs, robot_dir, ckpt, say)
+        report = _build_into(staging, config, style, human_dirs, robot_dir, ckpt, say, pilot)
         old = out.parent / f".{out.name}.old-{os.getpid()}"
         if out.exists():
             os.replace(out, old)
@@ -257,6 +267,7 @@ def _build_into(
     robot_dir: str | Path | None,
     ckpt: str | Path | None,
     say: Callable[[str], None],
+    pilot: bool,
 ) -> BuildReport:
     # human samples first: a bad folder or file fails before the model runs
     dirs = [*(config.human.get("dirs") or []), *human_dirs]
@@ -289,7 +300,14 @@ def _build_into(
             f"{config.human_writers} human writers; record them with capture/index.html and "
             "rebuild with --human DIR (or list the folders in human.dirs)"
         ]
-    ready = not missing
+    pilot = pilot and bool(missing)
+    if pilot:  # stand-ins for the missing writers
+        for word in config.words:
+            short = config.human_writers - len(writers[word])
+            for sample in stand_ins(robot[word], short, config.seed) if short > 0 else []:
+                humans.by_word[word][sample.writer_id] = sample
+                writers[word].append(sample.writer_id)
+    ready = pilot or not missing
 
     # stimuli: every sample the design may show, drawn alike, under opaque names
     samples: list[Sample] = list(robot.values())
@@ -319,15 +337,13 @@ def _build_into(
     # pages
     assets = {dst: web_asset(src) for src, dst in STUDY_ASSETS.items()}
     capture_assets = {dst: web_asset(src) for src, dst in CAPTURE_ASSETS.items()}
-    app_version = (
-        f"{prg.__version__}+"
-        + _hash(
-            json.dumps(trials, sort_keys=True).encode(),
-            json.dumps(_page_config(config, "", ready, missing), sort_keys=True).encode(),
-            *assets.values(),
-        )[:10]
+    digest = _hash(
+        json.dumps(trials, sort_keys=True).encode(),
+        json.dumps(_page_config(config, "", ready, missing, pilot), sort_keys=True).encode(),
+        *assets.values(),
     )
-    page = _page_config(config, app_version, ready, missing)
+    app_version = f"{prg.__version__}+{digest[:10]}" + ("-pilot" if pilot else "")
+    page = _page_config(config, app_version, ready, missing, pilot)
     for name, data in assets.items():
         (root / name).write_bytes(data)
     (root / "config.js").write_text(js_assignment("PRG_STUDY_CONFIG", page), encoding="utf-8")
@@ -350,7 +366,8 @@ def _build_into(
     (capture / "config.js").write_text(
         js_assignment("PRG_CAPTURE_CONFIG", capture_cfg), encoding="utf-8"
     )
-    report = BuildReport(root, ready, missing, humans.notes, len(samples), app_version)
+    notes = [*balance_notes(config), *humans.notes]
+    report = BuildReport(root, ready, pilot, missing, notes, len(samples), app_version)
     _write_json(
         root / "manifest.json",
         {
@@ -360,8 +377,9 @@ def _build_into(
             "app_version": app_version,
             "seed": config.seed,
             "ready": ready,
+            "pilot": pilot,
             "missing": missing,
-            "notes": humans.notes,
+            "notes": notes,
             "words": list(config.words),
             "participants": len(rows),
             "stimuli": len(samples),
@@ -370,11 +388,13 @@ def _build_into(
             "columns": list(response_columns(config.kind)),
         },
     )
-    (root / "README.md").write_text(_readme(config, page, ready, missing), encoding="utf-8")
+    (root / "README.md").write_text(_readme(config, page), encoding="utf-8")
     return report
 
 
-def _page_config(config: StudyConfig, app_version: str, ready: bool, missing: list[str]) -> dict:
+def _page_config(
+    config: StudyConfig, app_version: str, ready: bool, missing: list[str], pilot: bool
+) -> dict:
     code = config.completion["code"]
     url = config.completion["url"]
     return {
@@ -389,6 +409,7 @@ def _page_config(config: StudyConfig, app_version: str, ready: bool, missing: li
         "seed": config.seed,
         "app_version": app_version,
         "ready": ready,
+        "pilot": pilot,
         "missing": missing,
         "completion": {
             "code": code,
@@ -406,8 +427,15 @@ def _write_json(path: Path, obj) -> None:
     path.write_text(json.dumps(obj, indent=1, sort_keys=True, ensure_ascii=False) + "\n")
 
 
-def _readme(config: StudyConfig, page: dict, ready: bool, missing: list[str]) -> str:
-    status = "ready to run" if ready else "NOT READY:\n\n" + "\n".join(f"- {m}" for m in missing)
+def _readme(config: StudyConfig, page: dict) -> str:
+    if page["pilot"]:
+        status = "PILOT (stand-ins replace the missing human samples: try it, collect no data)"
+    elif page["ready"]:
+        status = "ready to run"
+    else:
+        status = "NOT READY:\n\n" + "\n".join(f"- {m}" for m in page["missing"])
+    post = page["save"]["post_url"]
+    saving = f"and POSTed (as text/plain) to {post}" if post else "(save.post_url also POSTs it)"
     return f"""# Study `{config.name}` ({config.kind}) — {status}
 
 Open `index.html` (file:// works) or serve this folder from any static host
@@ -418,9 +446,10 @@ Open `index.html` (file:// works) or serve this folder from any static host
   row N; otherwise the row is `fnv1a32("{config.name}:" + PROLIFIC_PID) mod rows`
   (`studies.design.assign_row`), or random without a PROLIFIC_PID. For exact balance give
   each participant `?row=N` (a study per row, or a server that hands out rows in turn).
-- Responses: one CSV row per trial, columns {", ".join(page["columns"])}; downloaded at the end
-  {"and POSTed to " + page["save"]["post_url"] if page["save"]["post_url"] else "(set save.post_url to POST them as text/csv)"}.
+- Responses: one CSV row per trial, columns {", ".join(page["columns"])}; downloaded at the
+  end {saving}.
 - Completion code `{page["completion"]["code"]}`; redirect to {page["completion"]["redirect_url"]}.
-- Ground truth: `trials.csv`, `stimuli.csv`. The capture page for human writers: `capture/index.html`
-  (`?writer=ID`); its JSON files are human samples for `prg-study build --human DIR`.
+- Ground truth: `trials.csv`, `stimuli.csv`. The capture page for human writers:
+  `capture/index.html` (`?writer=ID`); its JSON files are human samples for
+  `prg-study build --human DIR`.
 """

@@ -47,9 +47,18 @@ def build_command(args: argparse.Namespace) -> int:
         ckpt=args.ckpt,
         out_dir=args.out,
         progress=None if args.quiet else _say,
+        pilot=args.pilot,
     )
     for note in report.notes:
         _say(f"note: {note}")
+    if report.pilot:
+        _say(
+            f"{config.name}: PILOT build — {report.out_dir}/index.html runs with stand-ins for "
+            "the missing human samples; do not collect data with it"
+        )
+        for line in report.missing:
+            _say(f"stand-ins for: {line}")
+        return 0
     if report.ready:
         _say(
             f"{config.name}: ready — {report.out_dir}/index.html "
@@ -98,6 +107,12 @@ def _add_build(subparsers) -> None:
         "--require-ready",
         action="store_true",
         help="exit 2 when human samples are missing (default: build what can be built)",
+    )
+    p.add_argument(
+        "--pilot",
+        action="store_true",
+        help="fill missing human samples with stand-ins made from the robot's, to try the "
+        "pages before the human writers have written (marked pilot; not for data)",
     )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=build_command)

@@ -667,6 +667,29 @@ def readability_rows(config: StudyConfig, writers: Mapping[str, Sequence[str]]) 
     return tuple(rows)
 
 
+def balance_notes(config: StudyConfig) -> list[str]:
+    """Where the counterbalancing can only be near-exact with these numbers (one line each)."""
+    notes = []
+    if config.kind == "turing":
+        k = config.n_options
+        if len(config.words) % k:
+            notes.append(
+                f"{len(config.words)} words are not a multiple of {k} options: the robot's "
+                "positions differ by one within a participant"
+            )
+        if config.participants % k:
+            notes.append(
+                f"{config.participants} participants are not a multiple of {k} options: the "
+                "robot's positions per word differ by one across participants"
+            )
+    elif config.participants % 2:
+        notes.append(
+            f"{config.participants} participants is odd: list {config.lists[0]} is used once "
+            f"more than list {config.lists[1]}"
+        )
+    return notes
+
+
 def design_rows(config: StudyConfig, writers: Mapping[str, Sequence[str]]) -> tuple[Row, ...]:
     """:func:`turing_rows` or :func:`readability_rows`, by ``config.kind``."""
     return (turing_rows if config.kind == "turing" else readability_rows)(config, writers)

@@ -539,6 +539,26 @@ def load_human_samples(
     return out
 
 
+def stand_ins(robot: Sample, n: int, seed: int, amount: float = 0.08) -> list[Sample]:
+    """``n`` placeholder "human" samples of the robot's word, for piloting a study before the
+    human writers have written: the robot's strokes under a random shear/scale and a slow
+    wobble, writers ``pilot01``, ``pilot02`` ... (``lifted`` False; never for real data).
+    """
+    pts = np.concatenate(robot.strokes)
+    height = float(np.ptp(pts[:, 1])) or 1.0
+    out = []
+    for k in range(n):
+        rng = np.random.default_rng([seed, 5, k])
+        a = np.eye(2) + rng.normal(0, amount, (2, 2))
+        strokes = []
+        for stroke in robot.strokes:
+            u = np.linspace(0, 1, len(stroke))[:, None]
+            wobble = np.sin(2 * np.pi * u * rng.uniform(1, 3, 2) + rng.uniform(0, 6, 2))
+            strokes.append(stroke @ a.T + wobble * amount * height * 0.5)
+        out.append(Sample(robot.word, f"pilot{k + 1:02d}", tuple(strokes), "pilot stand-in"))
+    return out
+
+
 # ---------------------------------------------------------------------------- robot samples
 def load_robot_words(folder: str | Path, words: Sequence[str]) -> dict[str, Sample]:
     """Robot samples from ``<folder>/<word>.json`` or ``<folder>/<word>/word.json``.

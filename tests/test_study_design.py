@@ -15,6 +15,7 @@ from studies.design import (
     ROBOT,
     Trial,
     assign_row,
+    balance_notes,
     fnv1a32,
     latin_square,
     load_study,
@@ -232,6 +233,18 @@ def test_readability_attention_check_repeats_the_participants_own_sample():
         check = row.trials[3]
         assert check.is_attention_check and check.expect == {"typed_text": "blue"}
         assert check.options == row.trials[2].options and check.word == row.trials[2].word
+
+
+def test_counts_that_break_exact_balance_are_reported():
+    assert balance_notes(turing()) == [] and balance_notes(readability()) == []
+    notes = balance_notes(turing(participants=12, words=WORDS[:7]))
+    assert [n.split(":")[0] for n in notes] == [
+        "7 words are not a multiple of 5 options",
+        "12 participants are not a multiple of 5 options",
+    ]
+    assert balance_notes(readability(participants=31)) == [
+        "31 participants is odd: list A is used once more than list B"
+    ]
 
 
 # ---------------------------------------------------------------------------- assignment

@@ -20,6 +20,7 @@ from studies.stimuli import (
     path_strokes,
     render_sample,
     render_strokes,
+    stand_ins,
     stimulus_name,
     word_strokes,
 )
@@ -220,6 +221,19 @@ def test_robot_words_are_read_from_either_layout(tmp_path):
     (nested / "word.json").rename(tmp_path / "nested" / "egg.json")
     with pytest.raises(UsageError, match=r"egg.json: holds 'cat', expected 'egg'"):
         load_robot_words(tmp_path / "nested", ["egg"])
+
+
+def test_pilot_stand_ins_are_distinct_deterministic_and_named_as_such():
+    robot = Sample("cat", ROBOT, (wobbly_word("cat", np.random.default_rng(0)),))
+    made = stand_ins(robot, 3, seed=1)
+    assert [s.writer_id for s in made] == ["pilot01", "pilot02", "pilot03"]
+    pictures = [np.asarray(render_sample(s, STYLE), dtype=int) for s in [robot, *made]]
+    for i in range(4):
+        for j in range(i):
+            assert np.abs(pictures[i] - pictures[j]).mean() > 1
+    again = stand_ins(robot, 3, seed=1)
+    for a, b in zip(made, again):
+        np.testing.assert_array_equal(a.strokes[0], b.strokes[0])
 
 
 def test_pen_up_travel_is_not_ink():

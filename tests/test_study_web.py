@@ -18,6 +18,7 @@ from urllib.parse import parse_qs, urlparse
 import pytest
 
 from studies.analysis.schema import STUDY1_COLUMNS, STUDY2_COLUMNS
+from studies.analysis.validate import load_responses
 from studies.bundle import response_columns
 from studies.cli import main
 from studies.design import assign_row, fnv1a32
@@ -167,6 +168,8 @@ def test_turing_study_runs_to_completion_over_http(page, turing_build):
     assert [r["is_attention_check"] for r in rows].count("true") == 1
     assert rows[2]["is_attention_check"] == "true"
     assert sorted(r["word"] for r in rows if r["is_attention_check"] == "false") == sorted(WORDS)
+    read = load_responses(download.value.path())  # what prg-study analyze reads
+    assert read.kinds == ["turing"] and len(read.frame) == len(rows)
 
 
 def test_page_hash_matches_python_and_row_parameter_wins(page, turing_build):
@@ -252,6 +255,8 @@ def test_readability_study_runs_from_a_file_url(page, readability_build):
                 answer is not None and answer.strip().lower() == trial["word"]
             )
     assert [r["writer"] for r in rows if r["is_attention_check"] == "false"].count("robot") == 3
+    read = load_responses(download.value.path())  # what prg-study analyze reads
+    assert read.kinds == ["readability"] and len(read.frame) == len(rows)
 
 
 # ---------------------------------------------------------------------------- the capture page
@@ -392,6 +397,27 @@ def test_without_human_samples_the_build_says_what_is_missing(page, tmp_path, sa
     page.goto((out / "index.html").as_uri())
     assert "not ready" in page.text_content("#not-ready")
     assert "human writers" in page.text_content("main ul")
+
+
+def test_a_pilot_build_runs_with_stand_ins_and_says_so(page, tmp_path, samples, capsys):
+    out = tmp_path / "pilot"
+    args = ["build", str(REPO / "conf/study/readability.yaml"), "--out", str(out), "--pilot"]
+    args += ["--robot", str(samples["robot"]), "--set", "words=[cat, dog]", "-q"]
+    assert main([*args, "--set", "participants=2", "--set", "attention_checks=[]"]) == 0
+    assert "readability: PILOT build" in capsys.readouterr().err
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["ready"] is manifest["pilot"] is True
+    assert manifest["app_version"].endswith("-pilot")
+    assert manifest["human_writers"]["cat"] == [f"pilot{k:02d}" for k in range(1, 11)]
+    row = start(page, (out / "index.html").as_uri() + "?row=1")
+    assert "Pilot build" in page.text_content("#pilot-banner")
+    with page.expect_download() as download:
+        for trial in row["trials"]:
+            page.fill("#answer", trial["word"])
+            page.click("#next")
+    _, rows = read_csv(Path(download.value.path()).read_text())
+    assert [r["correct"] for r in rows] == ["true", "true"]
+    assert {r["app_version"] for r in rows} == {manifest["app_version"]}
 
 
 def test_some_human_samples_missing_is_an_error_on_request(tmp_path, samples, capsys):

@@ -97,8 +97,10 @@
     var text = cfg.words[index];
     var dpr = window.devicePixelRatio || 1;
     var pad = el("canvas", { id: "pad", width: Math.round(cfg.canvas_width * dpr), height: Math.round(cfg.canvas_height * dpr) });
-    pad.style.width = cfg.canvas_width + "px";
-    pad.style.height = cfg.canvas_height + "px";
+    // shrinks on narrow screens, always keeping its shape: x and y stay on one scale
+    pad.style.width = "100%";
+    pad.style.maxWidth = cfg.canvas_width + "px";
+    pad.style.aspectRatio = cfg.canvas_width + " / " + cfg.canvas_height;
     var ctx = pad.getContext("2d");
     var message = el("p", { class: "note", id: "message" });
     var next = el("button", { class: "primary", id: "next", disabled: true, text: index + 1 < cfg.words.length ? "Next word" : "Finish" });

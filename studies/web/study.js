@@ -143,12 +143,12 @@
         el("p", { id: "declined", text: "You did not agree to take part; no answers were recorded. You may close this page." }),
       ]);
     });
-    show([
+    show((cfg.pilot ? [pilotBanner()] : []).concat([
       el("h1", { text: cfg.title }),
       el("p", { id: "consent-text", text: cfg.consent }),
       el("label", { class: "check", for: "consent-agree" }, [box, el("span", { text: "I have read the above and agree to take part." })]),
       el("div", { class: "actions" }, [go, no]),
-    ]);
+    ]));
   }
 
   function preload(trials) {
@@ -203,9 +203,15 @@
     };
   }
 
+  function pilotBanner() {
+    return el("p", { class: "instruction", id: "pilot-banner",
+      text: "Pilot build: the human samples are stand-ins made from the robot's. Do not collect data with it." });
+  }
+
   function header(trial, index) {
     var total = state.row.trials.length;
     var nodes = [el("p", { class: "progress", id: "progress", text: "Trial " + (index + 1) + " of " + total })];
+    if (cfg.pilot) nodes.unshift(pilotBanner());
     if (trial.is_attention_check && trial.instruction) {
       nodes.push(el("p", { class: "instruction", id: "check-instruction", text: trial.instruction }));
     }
