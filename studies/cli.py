@@ -132,7 +132,11 @@ def _add_unavailable(subparsers, reason: str) -> None:
 
 def make_parser() -> Parser:
     """The ``prg-study`` parser with every available sub-command."""
-    parser = Parser(prog=PROG, description=__doc__.split("\n\n")[0])
+    parser = Parser(
+        prog=PROG,
+        description="Build and analyse human-vs-robot handwriting user studies.",
+        epilog="Run 'prg-study COMMAND --help' for a command's options.",
+    )
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
     _add_build(subparsers)
     try:
