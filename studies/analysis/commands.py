@@ -46,8 +46,10 @@ def _share(value: str) -> float:
         x = float(value)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{value!r} is not a number") from None
-    if not (math.isfinite(x) and 0 <= x < 1):
-        raise argparse.ArgumentTypeError(f"{value} is outside [0, 1)")
+    if not (math.isfinite(x) and 0 <= x <= 0.5):
+        raise argparse.ArgumentTypeError(
+            f"{value} is outside 0-0.5 (a share of the answers' variance)"
+        )
     return x
 
 
@@ -248,7 +250,7 @@ def run_analyze(args: argparse.Namespace) -> int:
     """``prg-study analyze``: check, analyse, write the report folder; print where it went."""
     from studies.analysis.analyze import analyze_file
     from studies.analysis.config import load_config, with_overrides
-    from studies.analysis.report import write_report
+    from studies.analysis.report import check_out_dir, write_report
 
     cfg = load_config(args.study)
     cfg = with_overrides(
@@ -262,7 +264,7 @@ def run_analyze(args: argparse.Namespace) -> int:
         exclude_failed_attention=False if args.keep_inattentive else None,
         mixed_model=False if args.no_mixed else None,
     )
-    out = Path(args.out) if args.out else Path("reports") / "study" / Path(args.responses).stem
+    out = check_out_dir(args.out or Path("reports") / "study" / Path(args.responses).stem)
     analysis = analyze_file(args.responses, cfg)
     write_report(analysis, out, paper=not args.no_paper)
     for st in analysis.studies:
@@ -298,8 +300,8 @@ def run_power(args: argparse.Namespace) -> int:
 
     icc = P.DEFAULT_ICC if args.icc is None else args.icc
     word_icc = P.DEFAULT_WORD_ICC if args.word_icc is None else args.word_icc
-    if icc + word_icc >= 0.95:
-        raise UsageError(f"--icc {icc} plus --word-icc {word_icc} must stay below 0.95")
+    if icc + word_icc > 0.5:
+        raise UsageError(f"--icc {icc} plus --word-icc {word_icc} must be at most 0.5")
     if args.kind == "turing":
         margin = 0.05 if args.margin is None else args.margin
         if not (args.chance - margin > 0 and args.chance + margin < 1):
@@ -427,8 +429,8 @@ def run_simulate(args: argparse.Namespace) -> int:
     """``prg-study simulate``: write a simulated responses CSV and its truth JSON."""
     from studies.analysis.simulate import simulate_readability, simulate_turing
 
-    if args.icc + args.word_icc >= 0.95:
-        raise UsageError(f"--icc {args.icc} plus --word-icc {args.word_icc} must stay below 0.95")
+    if args.icc + args.word_icc > 0.5:
+        raise UsageError(f"--icc {args.icc} plus --word-icc {args.word_icc} must be at most 0.5")
     words = _words(args)
     common = dict(
         icc=args.icc,

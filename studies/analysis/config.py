@@ -10,7 +10,7 @@ top level or under an ``analysis:`` node, and ignores the rest:
 ``margin_source``     ``preregistered`` | ``data``: where the margin came from
 ``alpha``             significance level (default 0.05)
 ``chance``            chance rate of picking the robot (default ``1 / n_options`` = 0.2)
-``n_options``         samples shown per Turing trial (default 5)
+``n_options``         samples shown per Turing trial (default 5; or ``foils`` + 1)
 ``neutral``           the neutral confidence rating (default 3)
 ``words``             the study's words (used by the simulator)
 ``exclude_failed_attention`` drop participants who failed an attention check (default true)
@@ -116,6 +116,8 @@ def config_from_mapping(node: dict[str, Any], path: str = "config") -> AnalysisC
     n_options = N_OPTIONS
     if node.get("n_options") is not None:
         n_options = int(_number(node["n_options"], "n_options", path, 1, 1000))
+    elif node.get("foils") is not None:
+        n_options = int(_number(node["foils"], "foils", path, 0, 1000)) + 1
     chance = 1.0 / n_options
     if node.get("chance") is not None:
         chance = _number(node["chance"], "chance", path, 0, 1)
@@ -163,18 +165,17 @@ def config_from_mapping(node: dict[str, Any], path: str = "config") -> AnalysisC
 def with_overrides(cfg: AnalysisConfig, **overrides: Any) -> AnalysisConfig:
     """``cfg`` with the command line's values (``None`` means: not given) checked and applied."""
     given = {k: v for k, v in overrides.items() if v is not None}
-    if "margin" in given:
-        _number(given["margin"], "--margin", "command line", 0, 1)
-        if "margin_source" not in given:
-            given["margin_source"] = "unstated"
-    if "alpha" in given:
-        _number(given["alpha"], "--alpha", "command line", 0, 0.5)
-    if "chance" in given:
-        _number(given["chance"], "--chance", "command line", 0, 1)
     if "margin_source" in given and given["margin_source"] not in MARGIN_SOURCES[:2]:
         raise UsageError(
             f"--margin-source {given['margin_source']!r} is not one of preregistered, data"
         )
+    if "margin" in given:
+        _number(given["margin"], "--margin", "command line", 0, 1)
+        given.setdefault("margin_source", "unstated")
+    if "alpha" in given:
+        _number(given["alpha"], "--alpha", "command line", 0, 0.5)
+    if "chance" in given:
+        _number(given["chance"], "--chance", "command line", 0, 1)
     if "kind" in given and given["kind"] not in (TURING, READABILITY):
         raise UsageError(f"study kind {given['kind']!r} is not one of {', '.join(STUDY_KINDS)}")
     return replace(cfg, **given)

@@ -607,8 +607,9 @@ def _methods(doc: Doc, analysis: Analysis) -> None:
 
 def build_report(analysis: Analysis, reproduced: pd.DataFrame | None = None) -> Doc:
     """The report as a :class:`Doc` (render with ``.markdown()`` / ``.html()``)."""
-    name = analysis.config.name or "User-study analysis"
-    doc = Doc(f"{name}: {Path(analysis.source).name}")
+    name = analysis.config.name
+    file = Path(analysis.source).name
+    doc = Doc(f"User-study analysis: {name} ({file})" if name else f"User-study analysis: {file}")
     doc.h(2, "Summary")
     doc.ul([line for st in analysis.studies for line in st.conclusions])
     doc.h(2, "Data")
@@ -653,6 +654,18 @@ def _jsonable(x):
     return x
 
 
+def check_out_dir(out: str | Path) -> Path:
+    """``out`` as a Path, if it is new, empty or an earlier report folder (else UsageError)."""
+    out = Path(out)
+    if out.exists() and (
+        not out.is_dir() or (any(out.iterdir()) and not (out / "report.md").exists())
+    ):
+        raise UsageError(
+            f"--out {out}: exists and is not an earlier report folder; choose a new or empty folder"
+        )
+    return out
+
+
 def write_report(analysis: Analysis, out: str | Path, *, paper: bool = True) -> Path:
     """Write the report folder atomically (see the module docstring); returns ``out``.
 
@@ -661,13 +674,7 @@ def write_report(analysis: Analysis, out: str | Path, *, paper: bool = True) -> 
     prg.errors.UsageError
         ``out`` exists, is not empty and does not hold an earlier report.
     """
-    out = Path(out)
-    if out.exists() and (
-        not out.is_dir() or (any(out.iterdir()) and not (out / "report.md").exists())
-    ):
-        raise UsageError(
-            f"--out {out}: exists and is not an earlier report folder; choose a new or empty folder"
-        )
+    out = check_out_dir(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     from studies.analysis.paper import reproduce_paper
 
@@ -735,4 +742,4 @@ def write_report(analysis: Analysis, out: str | Path, *, paper: bool = True) -> 
     return out
 
 
-__all__ = ["Doc", "build_report", "fmt_p", "tests_table", "write_report"]
+__all__ = ["Doc", "build_report", "check_out_dir", "fmt_p", "tests_table", "write_report"]

@@ -47,6 +47,7 @@ _W = _WEIGHTS / math.sqrt(math.pi)
 CONFIDENCE_CUTS = np.array([1.5, 2.5, 3.5, 4.5])
 CONFIDENCE_LATENT_SD = 1.5
 APP_VERSION = "simulated"
+MAX_ICC = 0.5  #: largest icc + word_icc the calibration accepts
 
 
 def _moments(b0: float, su: float, sv: float) -> tuple[float, float, float]:
@@ -60,7 +61,10 @@ def _moments(b0: float, su: float, sv: float) -> tuple[float, float, float]:
 
 def _intercept(rate: float, su: float, sv: float) -> float:
     """b0 such that the population-average rate is ``rate``."""
-    return float(optimize.brentq(lambda b: _moments(b, su, sv)[0] - rate, -30, 30, xtol=1e-12))
+    reach = 30.0 + 8.0 * (su + sv)  # |b0| needed grows with the random-effect SDs
+    return float(
+        optimize.brentq(lambda b: _moments(b, su, sv)[0] - rate, -reach, reach, xtol=1e-12)
+    )
 
 
 def latent_parameters(
@@ -74,7 +78,7 @@ def latent_parameters(
         Population-average probability, in (0, 1).
     icc, word_icc : float
         Participant and word shares of the 0/1 answers' variance (probability scale), >= 0,
-        together < 1.
+        together at most :data:`MAX_ICC` (0.5; larger shares need logit SDs beyond the quadrature).
 
     Returns
     -------
@@ -83,8 +87,10 @@ def latent_parameters(
     """
     if not 0 < rate < 1:
         raise ValueError(f"rate {rate} is outside (0, 1)")
-    if icc < 0 or word_icc < 0 or icc + word_icc >= 0.95:
-        raise ValueError(f"icc {icc} and word_icc {word_icc} must be >= 0 with a sum below 0.95")
+    if icc < 0 or word_icc < 0 or icc + word_icc > MAX_ICC:
+        raise ValueError(
+            f"icc {icc} and word_icc {word_icc} must be >= 0 with a sum of at most {MAX_ICC}"
+        )
     target = rate * (1 - rate)
 
     def sd_for(share: float, other: float, which: int) -> float:
@@ -95,7 +101,7 @@ def latent_parameters(
             su, sv = (s, other) if which == 1 else (other, s)
             return _moments(_intercept(rate, su, sv), su, sv)[which] - share * target
 
-        return float(optimize.brentq(f, 1e-6, 40.0, xtol=1e-10))
+        return float(optimize.brentq(f, 1e-6, 20.0, xtol=1e-10))
 
     su = sd_for(icc, 0.0, 1)
     sv = sd_for(word_icc, su, 2)
