@@ -131,3 +131,17 @@ def test_readability_paper_sized_study_with_equal_writers_is_not_called_equal():
     assert not paper.reject and "not evidence of equality" in paper.conclusion
     assert st.verdict["verdict"] in {"non-inferior", "inconclusive", "equally readable"}
     assert "paired by participant" in st.conclusions[0]
+
+
+def test_readability_between_participants_falls_back_on_the_gee():
+    table, _ = simulate_readability(300, 0.8, seed=12)
+    between = table[
+        ((table.list_id == "A") & (table.writer == "human"))
+        | ((table.list_id == "B") & (table.writer == "robot"))
+        | (table.is_attention_check == "true")
+    ]
+    st = analyze_table(between, CFG2).studies[0]
+    assert st.verdict["primary"] == "GEE difference (robot - human)"
+    assert (
+        st.verdict["verdict"] == "equally readable" and "GEE on participants" in st.conclusions[0]
+    )

@@ -294,3 +294,14 @@ def test_the_study_configs_in_conf_read_as_their_kind():
     for kind in ("turing", "readability"):
         cfg = load_config(REPO / "conf" / "study" / f"{kind}.yaml")
         assert cfg.kind == kind and 0 < cfg.margin_for(kind) < 0.5 and 0 < cfg.alpha < 0.5
+
+
+def test_a_chance_of_one_in_k_allows_k_samples_per_trial(turing_table):
+    cfg = with_overrides(AnalysisConfig(), chance=1 / 6)
+    assert cfg.n_options == 6
+    t = turing_table.copy()
+    i = t.index[t.is_attention_check == "false"][0]
+    t.loc[i, ["robot_index", "chosen_index", "chose_robot"]] = ["5", "5", "true"]
+    assert check_responses(t, n_options=cfg.n_options).frame.loc[i, "chose_robot"] == 1.0
+    with pytest.raises(ResponseFileError, match="robot_index 5 is outside 0-4"):
+        check_responses(t)

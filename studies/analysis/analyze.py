@@ -448,14 +448,16 @@ def _readability_verdict(tests: pd.DataFrame, margin: float, a: float):
     ni = _row(tests, f"non-inferiority by participant (margin {margin:g})")
     verdict: dict = {"study": READABILITY, "margin": margin, "alpha": a}
     lines, contrasts = [], []
-    if not _ok(diff):
-        gee = _row(tests, "GEE difference (robot - human)")
-        verdict.update(verdict="not estimable")
-        lines.append(
-            "**Readability**: the paired analysis is not estimable from these data"
-            + (f"; GEE difference {_ci(gee)}." if _ok(gee) else ".")
-        )
-        return verdict, lines, contrasts
+    how = "paired by participant"
+    if not _ok(diff):  # e.g. a between-participants file: fall back on the GEE
+        diff = _row(tests, "GEE difference (robot - human)")
+        tost = _row(tests, f"GEE TOST (±{margin:g})")
+        ni = _row(tests, f"GEE non-inferiority (margin {margin:g})")
+        how = "GEE on participants; too few participants read both writers for the paired tests"
+        if not _ok(diff):
+            verdict.update(verdict="not estimable")
+            lines.append("**Readability**: not estimable from these data (see the tests table).")
+            return verdict, lines, contrasts
     d = float(diff["estimate"])
     equiv = bool(_ok(tost) and tost["reject"])
     noninf = bool(_ok(ni) and ni["reject"])
@@ -475,8 +477,9 @@ def _readability_verdict(tests: pd.DataFrame, margin: float, a: float):
         different=sig,
         difference=d,
         difference_ci=[float(diff["ci_low"]), float(diff["ci_high"])],
+        primary=diff["test"],
     )
-    head = f"robot minus human success rate {_ci(diff)} (paired by participant)"
+    head = f"robot minus human success rate {_ci(diff)} ({how})"
     lines.append(
         {
             "equally readable": f"**Equally readable**: {head}; equivalence within ±{margin:g} shown (TOST {_p(tost['p_value'])}).",

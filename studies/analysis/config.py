@@ -176,6 +176,9 @@ def with_overrides(cfg: AnalysisConfig, **overrides: Any) -> AnalysisConfig:
         _number(given["alpha"], "--alpha", "command line", 0, 0.5)
     if "chance" in given:
         _number(given["chance"], "--chance", "command line", 0, 1)
+        options = 1.0 / given["chance"]
+        if abs(options - round(options)) < 1e-6:  # chance 1/k: k samples per trial
+            given.setdefault("n_options", round(options))
     if "kind" in given and given["kind"] not in (TURING, READABILITY):
         raise UsageError(f"study kind {given['kind']!r} is not one of {', '.join(STUDY_KINDS)}")
     return replace(cfg, **given)

@@ -461,6 +461,9 @@ def _mixed(doc: Doc, mixed: pd.DataFrame, what: str) -> None:
         doc.p("The crossed mixed logit was not fitted (`--no-mixed`).")
         return
     status = str(mixed["status"].iloc[0])
+    if status.startswith("skipped"):
+        doc.p(f"The crossed mixed logit was skipped: {status[len('skipped: ') :]}.")
+        return
     if status.startswith("failed"):
         doc.warn(
             f"The crossed mixed logit (participants x words) could not be fitted: {status[len('failed: ') :]}. "

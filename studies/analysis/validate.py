@@ -212,10 +212,10 @@ def _check_rows(
                     f"{out.at[i, 'chosen_index']:.0f} vs robot_index {out.at[i, 'robot_index']:.0f}"
                 ),
             )
-            filled = chose.isna() & have_idx
+            filled = chose.isna() & have_idx & regular
             if filled.any():
                 notes.append(
-                    f"chose_robot was empty on {int(filled.sum())} rows; taken from chosen_index == robot_index"
+                    f"chose_robot was empty on {int(filled.sum())} trial rows; taken from chosen_index == robot_index"
                 )
             chose = chose.fillna(from_idx)
         else:
