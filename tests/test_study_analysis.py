@@ -178,6 +178,14 @@ def test_gee_rate_reports_instead_of_raising_when_every_answer_is_the_same():
     assert len(rows) == 2 and rows.conclusion.str.startswith("not estimable").all()
 
 
+def test_gee_rate_with_one_participant_is_not_estimable_rather_than_overconfident():
+    one = binary_frame(6, 10, participants=1)
+    row = S.gee_rate(one, "y", "participant_id", 0.2).iloc[0]
+    assert row.conclusion == "not estimable: needs answers from at least 2 participants"
+    few = S.gee_rate(binary_frame(30, 100, participants=10), "y", "participant_id", 0.2).iloc[0]
+    assert "fewer than 20 clusters" in few.method
+
+
 def test_gee_difference_is_the_difference_in_rates_with_cluster_robust_se(paired_frame):
     rows = S.gee_difference(paired_frame, "correct", "writer", "participant_id", margin=0.1)
     means = paired_frame.groupby("writer")["correct"].mean()

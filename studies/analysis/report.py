@@ -261,7 +261,7 @@ def fig_turing_participants(per_part: pd.DataFrame, chance: float):
     """Histogram of the participants' rates of picking the robot."""
     plt = _plt()
     fig, ax = plt.subplots(figsize=(6.4, 3.0))
-    bins = np.linspace(0, 1, 21)
+    bins = np.arange(-0.025, 1.026, 0.05)  # centred on multiples of 0.05 (rates of 10 or 20 trials)
     ax.hist(per_part["rate"], bins=bins, color="#8899cc", edgecolor="white")
     ax.axvline(chance, color="#2a7f2a", lw=1.2, label=f"chance {chance:g}")
     ax.set_xlabel("participant's rate of picking the robot's sample")
@@ -429,7 +429,7 @@ def _study1_section(doc: Doc, st: StudyAnalysis) -> None:
         r = icc.loc["chose_robot"]
         doc.p(
             f"Answers cluster within participants: the ICC of the 0/1 answers is {_num(r.icc)} "
-            f"(design effect {_num(r.design_effect, 2)} for {_num(r.mean_cluster_size, 1)} trials per participant), "
+            f"(design effect {_num(r.design_effect, 2)} for {r.mean_cluster_size:.3g} trials per participant), "
             f"so {len(d)} trials carry the information of about {len(d) / max(r.design_effect, 1):.0f} independent ones."
         )
     doc.figure(

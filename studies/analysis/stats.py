@@ -447,9 +447,10 @@ def _gee_fit(y, exog, groups, family, offset=None):
         except Exception:  # bias reduction needs invertible cluster blocks
             res = model.fit(cov_type="robust")
             cov = "robust"
-    for w in caught:
-        if "converge" in str(w.message).lower():
-            notes.append("GEE did not fully converge")
+    if any("converge" in str(w.message).lower() for w in caught):
+        notes.append("GEE did not fully converge")
+    if groups.max() + 1 < 20:
+        notes.append("fewer than 20 clusters: the robust SE is unreliable")
     rho = (
         float(np.atleast_1d(res.model.cov_struct.dep_params)[0])
         if res.model.cov_struct.dep_params is not None
@@ -487,6 +488,8 @@ def gee_rate(
     base = dict(n=n, clusters=n_cl, alpha=alpha)
     off = float(logit(chance))
     try:
+        if n_cl < 2:
+            raise ValueError(f"needs answers from at least 2 {_unit(cluster)}s")
         if y.min() == y.max():
             raise ValueError(f"every answer is {int(y[0])}: the log-odds are infinite")
         res, cov, rho, notes = _gee_fit(
@@ -775,6 +778,8 @@ def gee_difference(
     label = f"{levels[1]} - {levels[0]}"
     base = dict(n=len(y), clusters=int(groups.max() + 1) if len(y) else 0, alpha=alpha)
     try:
+        if base["clusters"] < 2:
+            raise ValueError(f"needs answers from at least 2 {_unit(cluster)}s")
         if x.min() == x.max():
             raise ValueError(f"only one {condition} level present")
         exog = np.column_stack([np.ones_like(x), x])
