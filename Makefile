@@ -3,9 +3,10 @@ SHELL := /bin/bash
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
-EXTRAS ?= dev,sweep,speech
-# Debian packages: espeak-ng speaks the test and demo words, sox converts their audio
-SYSTEM_PACKAGES ?= espeak-ng sox
+EXTRAS ?= dev,sweep,speech,browser
+# Debian packages: espeak-ng speaks the test and demo words, sox converts their audio, chromium
+# runs the study pages in the browser tests (Playwright drives it; no `playwright install`)
+SYSTEM_PACKAGES ?= espeak-ng sox chromium
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 STAMP := $(VENV)/.setup-$(shell cat pyproject.toml | sha1sum | cut -c1-12)
 export PATH := $(CURDIR)/$(BIN):$(PATH)
@@ -37,7 +38,7 @@ system: ## Install the Debian packages the tests and the demo use, if missing (r
 
 setup: system $(STAMP) ## Create .venv, install system packages, torch (CPU) and the project (idempotent)
 
-demo: setup ## Run the whole pipeline (dvc repro): dataset, models, evaluation, Table II, robot
+demo: setup ## Run the whole pipeline (dvc repro): data, models, evaluation, Table II, robot, studies
 	dvc repro
 	@echo
 	@echo "Dataset:  data/prepared/synthetic/ (train/val/test.npz, manifest.json, figures/)"
@@ -45,6 +46,7 @@ demo: setup ## Run the whole pipeline (dvc repro): dataset, models, evaluation, 
 	@echo "Reports:  reports/table1.md, reports/coherence.md, reports/robustness.md, reports/figures/"
 	@echo "Words:    reports/dictaphone/table2.png, table2.md; <word>/<sound|image>/word.rrd (rerun FILE)"
 	@echo "Robot:    reports/simulate/ink.png, page.png, metrics.json; rerun reports/simulate/sim.rrd"
+	@echo "Studies:  studies/turing/build/, studies/readability/build/ (index.html; capture/index.html)"
 	@echo "Runs:     mlflow ui --backend-store-uri sqlite:///mlruns.db   (then http://127.0.0.1:5000)"
 
 test: setup ## Run the default test suite (fast; no `slow` tests)
