@@ -140,12 +140,13 @@ def dictaphone(cfg: DictConfig) -> dict[str, Any]:
                 else:
                     folder = inputs_dir / word
                     folder.mkdir()
-                    for i, image in enumerate(letter_images(test, word)):
+                    images_of_word = letter_images(test, word)
+                    for i, image in enumerate(images_of_word):
                         _save_png(image, folder / f"{i}_{word[i]}.png")
                     inputs = {"image": image_inputs(folder)}
                     text = word
                     perceived = _read(model, inputs)
-                    figure_inputs[word, channel] = letter_images(test, word)
+                    figure_inputs[word, channel] = images_of_word
                 check_inputs(text, inputs)
                 letters = decode_letters(model, inputs, params.temperature, params.seed)
                 written, rollout = compose_word(letters, text, params)

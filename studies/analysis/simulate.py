@@ -157,6 +157,14 @@ def _timestamps(rng: np.random.Generator, n: int, start: datetime, rt_ms: np.nda
     return out
 
 
+def _check_positions(rng: np.random.Generator, n_trials: int, checks: int) -> set[int]:
+    """Trials (never the first) that are attention checks."""
+    if not checks:
+        return set()
+    picked = rng.choice(np.arange(1, n_trials), size=min(checks, n_trials - 1), replace=False)
+    return set(picked.tolist())
+
+
 def _rt(rng: np.random.Generator, n: int) -> np.ndarray:
     return np.round(rng.lognormal(math.log(4000), 0.5, n))
 
@@ -218,15 +226,7 @@ def simulate_turing(
         order = rng.permutation(len(words))
         positions = rng.permutation(np.resize(rng.permutation(n_options), len(words)))
         n_trials = len(words) + attention_checks
-        check_at = (
-            set(
-                rng.choice(
-                    np.arange(1, n_trials), size=min(attention_checks, n_trials - 1), replace=False
-                ).tolist()
-            )
-            if attention_checks
-            else set()
-        )
+        check_at = _check_positions(rng, n_trials, attention_checks)
         rts = _rt(rng, n_trials)
         stamps = _timestamps(rng, n_trials, start, rts)
         w_iter = iter(zip(order, positions))
@@ -350,15 +350,7 @@ def simulate_readability(
         u = rng.normal(0, su) if su > 0 else 0.0
         order = rng.permutation(len(words))
         n_trials = len(words) + attention_checks
-        check_at = (
-            set(
-                rng.choice(
-                    np.arange(1, n_trials), size=min(attention_checks, n_trials - 1), replace=False
-                ).tolist()
-            )
-            if attention_checks
-            else set()
-        )
+        check_at = _check_positions(rng, n_trials, attention_checks)
         rts = _rt(rng, n_trials)
         stamps = _timestamps(rng, n_trials, start, rts)
         w_iter = iter(order)
