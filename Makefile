@@ -12,7 +12,7 @@ STAMP := $(VENV)/.setup-$(shell cat pyproject.toml | sha1sum | cut -c1-12)
 export PATH := $(CURDIR)/$(BIN):$(PATH)
 
 .DEFAULT_GOAL := help
-.PHONY: help system setup demo test test-all lint format bench clean
+.PHONY: help system setup demo test test-all lint format bench results clean
 
 help: ## Show this help
 	@awk 'BEGIN {FS = ":.*## "} /^[a-zA-Z_-]+:.*## / {printf "  \033[36m%-10s\033[0m %s\n", $$1, $$2}' $(MAKEFILE_LIST)
@@ -63,7 +63,7 @@ format: setup ## Format and fix with ruff
 	$(BIN)/ruff format src studies tests benchmarks
 	$(BIN)/ruff check --fix src studies tests benchmarks
 
-bench: setup ## Run the benchmarks (tables printed, JSON under benchmarks/results/)
+bench: setup ## Run the benchmarks (tables printed, JSON under benchmarks/results/), then `results`
 	$(BIN)/python benchmarks/bench_prepare.py
 	$(BIN)/python benchmarks/bench_train.py
 	$(BIN)/python benchmarks/bench_evaluate.py
@@ -71,6 +71,10 @@ bench: setup ## Run the benchmarks (tables printed, JSON under benchmarks/result
 	$(BIN)/python benchmarks/bench_write.py --speech
 	$(BIN)/python benchmarks/bench_speech.py
 	$(BIN)/python benchmarks/bench_simulate.py
+	$(MAKE) results
+
+results: setup ## benchmarks/results.md and the README's result tables from the JSON (after `make demo`: SNAPSHOT=1)
+	$(BIN)/python benchmarks/summarize.py $(if $(SNAPSHOT),--snapshot)
 
 clean: ## Remove caches (keeps .venv, data and runs)
 	rm -rf .pytest_cache .ruff_cache .hypothesis

@@ -1,0 +1,496 @@
+"""One results table from the benchmark and demo-report JSON: ``benchmarks/results.md`` and the
+README's generated blocks (numbers are never typed by hand).
+
+    python benchmarks/summarize.py              # results.md + README blocks from the committed JSON
+    python benchmarks/summarize.py --snapshot   # first copy the demo's report JSON (after `make demo`)
+                                                # into benchmarks/results/demo/
+    python benchmarks/summarize.py --check      # exit 1 if results.md or the README are stale
+
+Inputs: ``benchmarks/results/bench_*.json`` (written by each benchmark) and
+``benchmarks/results/demo/*.json`` (a snapshot of the DVC pipeline's metrics, with the
+``dvc.lock`` hashes of the outputs they came from). Every benchmark figure is shown next to the
+reference it was measured against in the same run, with the ratio ours / reference.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import shutil
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "benchmarks" / "results"
+DEMO = RESULTS / "demo"
+SUMMARY = ROOT / "benchmarks" / "results.md"
+README = ROOT / "README.md"
+
+# DVC outputs copied by --snapshot: snapshot name -> path in the repository after `make demo`
+DEMO_SOURCES = {
+    "prepare.json": "reports/prepare/synthetic/metrics.json",
+    "models_cvae.json": "models/cvae/metrics.json",
+    "models_avae_ts.json": "models/avae_ts/metrics.json",
+    "models_avae_ti.json": "models/avae_ti/metrics.json",
+    "models_muse.json": "models/muse/metrics.json",
+    "classifiers.json": "models/classifiers/metrics.json",
+    "evaluate.json": "reports/metrics.json",
+    "dictaphone.json": "reports/dictaphone/metrics.json",
+    "simulate.json": "reports/simulate/metrics.json",
+    "study.json": "reports/study/readability/metrics.json",
+}
+FAMILIES = {
+    "cvae": "PRG_CVAE(T,S)",
+    "avae_ts": "PRG_AVAE(T,S)",
+    "avae_ti": "PRG_AVAE(T,I)",
+    "muse": "PRG_MUSE(T,S,I)",
+}
+
+
+class SummaryError(Exception):
+    """A results file that is missing or does not have the expected fields."""
+
+
+@dataclass(frozen=True)
+class Row:
+    figure: str
+    ours: str
+    reference: str
+    reference_value: str
+    ratio: float  # ours / reference
+    target: str = ""
+
+
+# ---------------------------------------------------------------- benchmark adapters
+
+
+def _prepare(d: dict) -> list[Row]:
+    render = d["render"]
+    return [
+        Row(
+            f"full synthetic build ({sum(d['samples'].values()):,} samples)",
+            f"{d['total_s']:.0f} s",
+            "time budget",
+            f"{d['budget_s']:.0f} s",
+            d["total_s"] / d["budget_s"],
+            "<= 1",
+        ),
+        Row(
+            "trajectory renderer",
+            f"{render['ours_per_s']:,.0f} images/s",
+            "Pillow, 4x supersampling",
+            f"{render['pillow_per_s']:,.0f} images/s",
+            render["ours_per_s"] / render["pillow_per_s"],
+            ">= 1",
+        ),
+    ]
+
+
+def _train(d: dict) -> list[Row]:
+    target = d["settings"]["target_ratio"]
+    return [
+        Row(
+            f"training throughput, {family} (batch {f['batch_size']})",
+            f"{f['lightning_samples_per_s']:,.0f} samples/s",
+            "plain PyTorch loop",
+            f"{f['plain_samples_per_s']:,.0f} samples/s",
+            f["lightning_samples_per_s"] / f["plain_samples_per_s"],
+            f">= {target}",
+        )
+        for family, f in d["families"].items()
+    ]
+
+
+def _evaluate(d: dict) -> list[Row]:
+    return [
+        Row(
+            f"importance-weighted estimator, {t['cell']} (K = {t['k']})",
+            f"{t['estimator_samples_per_s']:,.0f} samples/s",
+            "raw decoder forward",
+            f"{t['decoder_samples_per_s']:,.0f} samples/s",
+            t["estimator_samples_per_s"] / t["decoder_samples_per_s"],
+            f">= {d['target_ratio']}",
+        )
+        for t in d["throughput"]
+    ]
+
+
+def _dmp(d: dict) -> list[Row]:
+    target = f"<= {1 / d['settings']['target_ratio']:.2g}"
+    rows = []
+    for r in d["rows"]:
+        ours = r["ours_fit_ms"] + r["ours_rollout_ms"]
+        theirs = r["theirs_fit_ms"] + r["theirs_rollout_ms"]
+        rows.append(
+            Row(
+                f"DMP fit + rollout, {r['points']} points, {r['basis']} bases",
+                f"{ours:.1f} ms (RMSE {10 * r['ours_rmse_cm']:.2g} mm)",
+                "movement-primitives",
+                f"{theirs:.1f} ms (RMSE {10 * r['theirs_rmse_cm']:.2g} mm)",
+                ours / theirs,
+                target,
+            )
+        )
+    for r in d["equal_error"]:
+        rows.append(
+            Row(
+                f"DMP at equal error, {r['points']} points",
+                f"{r['ours_ms']:.1f} ms ({r['ours_basis']} bases)",
+                "movement-primitives",
+                f"{r['theirs_ms']:.1f} ms ({r['theirs_basis']} bases)",
+                r["ours_ms"] / r["theirs_ms"],
+                target,
+            )
+        )
+    return rows
+
+
+def _write_word(d: dict) -> list[Row]:
+    target_ms = d["settings"]["target_ms_6_letters"]
+    rows = [
+        Row(
+            f"write a {r['letters']}-letter word, {r['family']} (label -> DMP rollout)",
+            f"{r['total_ms']:.1f} ms",
+            "straight-line joiner",
+            f"{r['straight_ms']:.1f} ms",
+            r["total_ms"] / r["straight_ms"],
+            f"<= {target_ms:.0f} ms" if r["letters"] == 6 else "",
+        )
+        for r in d["rows"]
+        if r["letters"] in (1, 6, 12)
+    ]
+    worst = max(r["max_rmse_mm"] for r in d["rows"])
+    target_mm = d["settings"]["target_rmse_mm"]
+    rows.append(
+        Row(
+            "DMP reproduction error, worst word",
+            f"{worst:.3f} mm",
+            "target",
+            f"{target_mm} mm",
+            worst / target_mm,
+            "<= 1",
+        )
+    )
+    return rows
+
+
+def _speech(d: dict) -> list[Row]:
+    reference = d["settings"]["reference"]
+    ref = d["summary"][reference]["all"]
+    return [
+        Row(
+            f"speech, {name} (exact word; median latency)",
+            f"{s['accuracy']:.1%} ({s['median_ms']:,.0f} ms)",
+            f"{reference} alone",
+            f"{ref['accuracy']:.1%} ({ref['median_ms']:,.0f} ms)",
+            s["accuracy"] / ref["accuracy"],
+        )
+        for name, summary in d["summary"].items()
+        if name != reference
+        for s in [summary["all"]]
+    ]
+
+
+def _simulate(d: dict) -> list[Row]:
+    rows = []
+    for r in d["rows"]:
+        rows.append(
+            Row(
+                f"pen tracking error, {r['robot']}, '{r['word']}' (real-time factor "
+                f"{r['realtime_factor']:.0f})",
+                f"{1000 * r['tracking_mean_mm']:.1f} um",
+                "plain PyBullet IK",
+                f"{1000 * r['plain_tracking_mean_mm']:.1f} um",
+                r["tracking_mean_mm"] / r["plain_tracking_mean_mm"],
+            )
+        )
+    for robot in dict.fromkeys(r["robot"] for r in d["rows"]):
+        r = max((r for r in d["rows"] if r["robot"] == robot), key=lambda r: r["letters"])
+        rows.append(
+            Row(
+                f"IK error, {robot}, '{r['word']}'",
+                f"{1000 * r['ik_error_mean_mm']:.2f} um",
+                "null-space PyBullet IK alone",
+                f"{1000 * r['null_space_ik_error_mean_mm']:,.0f} um",
+                r["ik_error_mean_mm"] / r["null_space_ik_error_mean_mm"],
+            )
+        )
+    return rows
+
+
+BENCHMARKS: dict[str, Callable[[dict], list[Row]]] = {
+    "bench_prepare": _prepare,
+    "bench_train": _train,
+    "bench_evaluate": _evaluate,
+    "bench_dmp": _dmp,
+    "bench_write": _write_word,
+    "bench_speech": _speech,
+    "bench_simulate": _simulate,
+}
+
+
+def read_json(path: Path) -> dict:
+    try:
+        return json.loads(path.read_text())
+    except FileNotFoundError:
+        raise SummaryError(f"{path}: missing (run its benchmark or `make demo`)") from None
+    except (OSError, ValueError) as err:
+        raise SummaryError(f"{path}: not readable JSON ({err})") from None
+
+
+def benchmark_rows(results: Path = RESULTS) -> dict[str, list[Row]]:
+    """Rows of every benchmark whose JSON exists, in the order of ``make bench``."""
+    out = {}
+    for name, adapter in BENCHMARKS.items():
+        path = results / f"{name}.json"
+        if not path.is_file():
+            continue
+        try:
+            out[name] = adapter(read_json(path))
+        except (KeyError, TypeError, ZeroDivisionError) as err:
+            raise SummaryError(
+                f"{path}: unexpected content ({type(err).__name__}: {err})"
+            ) from None
+    return out
+
+
+def _ratio(value: float) -> str:
+    if not math.isfinite(value):
+        return str(value)
+    if value == 0 or 0.01 <= abs(value) < 1000:
+        return f"{value:.3g}"
+    return f"{value:.1e}"
+
+
+def _table(header: list[str], body: list[list[str]]) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(cells) + " |" for cells in body]
+    return "\n".join(lines)
+
+
+def paper_cost_markdown(results: Path = RESULTS) -> str:
+    """The paper profile's training time on this CPU, from bench_train's measured throughput."""
+    path = results / "bench_train.json"
+    if not path.is_file():
+        return ""
+    d = read_json(path)
+    samples, threads = d["settings"]["train_samples"], d["settings"]["threads"]
+    hours = ", ".join(
+        f"{family} {50 * samples / f['lightning_samples_per_s'] / 3600:.1f} h"
+        for family, f in d["families"].items()
+    )
+    return (
+        f"\n\n`experiment=paper` (50 epochs over {samples:,} training samples) at the measured "
+        f"Lightning throughput ({threads} torch thread, validation not counted): {hours}."
+    )
+
+
+def benchmarks_markdown(results: Path = RESULTS) -> str:
+    rows = benchmark_rows(results)
+    body = [
+        [name, r.figure, r.ours, r.reference, r.reference_value, _ratio(r.ratio), r.target]
+        for name, items in rows.items()
+        for r in items
+    ]
+    header = ["benchmark", "figure", "ours", "reference", "reference value", "ratio", "target"]
+    return (
+        "Ratio = ours / reference, both measured in the same run (`make bench`; JSON in "
+        "`benchmarks/results/`). Times: lower is better; throughput and accuracy: higher.\n\n"
+        + _table(header, body)
+        + paper_cost_markdown(results)
+    )
+
+
+# ---------------------------------------------------------------- demo reports
+
+
+def snapshot(root: Path = ROOT, demo: Path = DEMO) -> None:
+    """Copy the demo pipeline's metrics JSON into ``demo`` with their ``dvc.lock`` hashes."""
+    import yaml
+
+    lock = yaml.safe_load((root / "dvc.lock").read_text())
+    hashes = {
+        out["path"]: out.get("md5", "")
+        for stage in lock["stages"].values()
+        for out in stage.get("outs", [])
+    }
+    demo.mkdir(parents=True, exist_ok=True)
+    provenance = {}
+    for name, source in DEMO_SOURCES.items():
+        path = root / source
+        read_json(path)
+        tmp = demo / f".{name}.tmp"
+        shutil.copyfile(path, tmp)
+        os.replace(tmp, demo / name)
+        # the lock entry of the file itself, or of the output folder holding it
+        owner = max(
+            (out for out in hashes if source == out or source.startswith(out + "/")),
+            key=len,
+            default=None,
+        )
+        provenance[name] = {"source": source, "dvc_out": owner, "dvc_md5": hashes.get(owner)}
+    _write_file(demo / "provenance.json", json.dumps(provenance, indent=2, sort_keys=True) + "\n")
+
+
+def demo_markdown(demo: Path = DEMO) -> str:
+    """Tables of the demo pipeline's results (quick profile, synthetic data)."""
+    d = {name: read_json(demo / name) for name in DEMO_SOURCES}
+    evaluate = d["evaluate.json"]
+    cells = ["T", "S", "I", "T_given_S", "T_given_I", "S_given_T", "I_given_T"]
+    titles = ["log p(x_" + c.replace("_given_", " \\| x_") + ")" for c in cells]
+    table1 = _table(
+        ["model", *titles, "val loss"],
+        [
+            [
+                FAMILIES[family],
+                *(
+                    f"{evaluate[key]:.1f}" if (key := f"{family}/logp_{c}") in evaluate else "-"
+                    for c in cells
+                ),
+                f"{d[f'models_{family}.json']['val_loss']:.1f}",
+            ]
+            for family in FAMILIES
+        ],
+    )
+    coherence_cells = ["T_given_S", "T_given_I", "I_given_T", "S_given_T", "T_given_TS"]
+    coherence = _table(
+        ["model", *(c.replace("_given_", " from ") for c in coherence_cells)],
+        [
+            [
+                FAMILIES[family],
+                *(
+                    f"{evaluate[key]:.0%}"
+                    if (key := f"{family}/coherence_{c}") in evaluate
+                    else "-"
+                    for c in coherence_cells
+                ),
+            ]
+            for family in FAMILIES
+        ],
+    )
+    dictaphone = d["dictaphone.json"]
+    table2 = _table(
+        ["word", "channel", "perceived", "written", "DMP error", "seconds"],
+        [
+            [
+                r["word"],
+                r["channel"],
+                r["perceived"],
+                r["written"],
+                f"{r['dmp_rmse_mm']:.3f} mm",
+                f"{r['seconds']:.2f}",
+            ]
+            for r in dictaphone["rows"]
+        ],
+    )
+    sim = d["simulate.json"]
+    study = d["study.json"]["studies"]["readability"]
+    classifiers = d["classifiers.json"]
+    prepare = d["prepare.json"]
+    lines = [
+        f"Synthetic data: {prepare['train_samples']:,} / {prepare['val_samples']:,} / "
+        f"{prepare['test_samples']:,} train / val / test samples; coherence classifiers "
+        f"{_accuracy_text(classifiers)}.",
+        "",
+        "**Table I** (importance-weighted log-likelihoods, nats; higher is better) and the "
+        "validation loss of each quick model:",
+        "",
+        table1,
+        "",
+        "**Cross-modal coherence** (the generated modality classified as the given label):",
+        "",
+        coherence,
+        "",
+        f"**Table II** (`prg-dictaphone`, MUSE): the words from speech (whisper, lexicon, "
+        f"rescoring) and from the letter images alone (images read right: "
+        f"{dictaphone['image_read_accuracy']:.0%}):",
+        "",
+        table2,
+        "",
+        f"**Robot** (`prg-simulate`, {sim['robot']} writes '{sim['text']}'): "
+        f"{sim['word_width_cm']:.1f} x {sim['word_height_cm']:.1f} cm in {sim['writing_s']:.1f} s, "
+        f"pen tracking error mean {1000 * sim['tracking_error_mean_mm']:.1f} um "
+        f"(max {1000 * sim['tracking_error_max_mm']:.0f} um), {sim['ink_strokes']} ink stroke(s), "
+        f"largest ink gap {sim['max_ink_gap_mm']:.2f} mm, real-time factor "
+        f"{sim['realtime_factor']:.1f}.",
+        "",
+        f"**Readability study on simulated participants** (`prg-study`, paper's rates): "
+        f"robot - human difference {study['difference']:+.3f} "
+        f"(95 % CI {study['difference_ci'][0]:+.3f} to {study['difference_ci'][1]:+.3f}), "
+        f"margin {study['margin']}: {study['verdict']} ({study['primary']}).",
+    ]
+    return "\n".join(lines)
+
+
+def _accuracy_text(classifiers: dict) -> str:
+    return "test accuracy " + ", ".join(
+        f"{name} {classifiers[name]['test_accuracy']:.1%}" for name in ("traj", "image")
+    )
+
+
+# ---------------------------------------------------------------- outputs
+
+
+def _write_file(path: Path, text: str) -> None:
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
+def results_markdown(results: Path = RESULTS) -> str:
+    return (
+        "# Benchmark results\n\n"
+        "Generated by `python benchmarks/summarize.py` (run by `make bench`); do not edit.\n\n"
+        + benchmarks_markdown(results)
+        + "\n"
+    )
+
+
+def fill_block(text: str, name: str, content: str) -> str:
+    """Replace what lies between ``<!-- generated:NAME -->`` and ``<!-- end:NAME -->``."""
+    begin, end = f"<!-- generated:{name} -->", f"<!-- end:{name} -->"
+    start, stop = text.find(begin), text.find(end)
+    if start < 0 or stop < start:
+        raise SummaryError(f"README.md: no {begin} ... {end} block")
+    return text[: start + len(begin)] + "\n" + content + "\n" + text[stop:]
+
+
+def readme_text(readme: str, results: Path = RESULTS, demo: Path = DEMO) -> str:
+    readme = fill_block(readme, "benchmarks", benchmarks_markdown(results))
+    return fill_block(readme, "demo", demo_markdown(demo))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--snapshot", action="store_true", help="copy the demo's metrics first")
+    parser.add_argument("--check", action="store_true", help="exit 1 if any output is stale")
+    args = parser.parse_args(argv)
+    try:
+        if args.snapshot:
+            snapshot()
+        outputs = {
+            SUMMARY: results_markdown(),
+            README: readme_text(README.read_text()),
+        }
+    except SummaryError as err:
+        print(f"summarize: error: {err}", file=sys.stderr)
+        return 2
+    stale = [p for p, text in outputs.items() if not p.is_file() or p.read_text() != text]
+    if args.check:
+        for path in stale:
+            print(
+                f"summarize: {path.relative_to(ROOT)} is stale: run `make results`", file=sys.stderr
+            )
+        return 1 if stale else 0
+    for path in stale:
+        _write_file(path, outputs[path])
+        print(f"wrote {path.relative_to(ROOT)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,75 @@
+"""`benchmarks/summarize.py`: the README's result tables come from the JSON, and stay in step."""
+
+import importlib.util
+import json
+import shutil
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+spec = importlib.util.spec_from_file_location("bench_summarize", ROOT / "benchmarks/summarize.py")
+summarize = sys.modules["bench_summarize"] = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(summarize)
+
+
+def test_results_md_and_readme_match_the_committed_json(capsys):
+    code = summarize.main(["--check"])
+    assert code == 0, capsys.readouterr().err
+
+
+def test_every_benchmark_json_gives_rows_with_a_reference_and_a_finite_ratio():
+    rows = summarize.benchmark_rows()
+    on_disk = {p.stem for p in summarize.RESULTS.glob("bench_*.json")}
+    assert set(rows) == on_disk == set(summarize.BENCHMARKS)
+    for name, items in rows.items():
+        assert items, name
+        for row in items:
+            assert row.reference and row.reference_value and row.ours
+            assert row.ratio > 0 and row.ratio < float("inf"), (name, row)
+
+
+def test_a_changed_measurement_changes_the_table(tmp_path):
+    results = tmp_path / "results"
+    shutil.copytree(summarize.RESULTS, results)
+    data = json.loads((results / "bench_train.json").read_text())
+    data["families"]["muse"]["lightning_samples_per_s"] = 12_345.0
+    data["families"]["muse"]["plain_samples_per_s"] = 24_690.0
+    (results / "bench_train.json").write_text(json.dumps(data))
+    table = summarize.benchmarks_markdown(results)
+    (line,) = [x for x in table.splitlines() if "throughput, muse" in x]
+    assert "12,345 samples/s" in line and "24,690 samples/s" in line and "| 0.5 |" in line
+    assert "muse 0.1 h" in table  # the paper-profile estimate follows the throughput
+
+
+def test_snapshot_copies_the_demo_metrics_with_their_dvc_hashes(tmp_path):
+    lock = {"schema": "2.0", "stages": {}}
+    for i, (name, source) in enumerate(summarize.DEMO_SOURCES.items()):
+        path = tmp_path / source
+        path.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(summarize.DEMO / name, path)
+        out = str(Path(source).parent) if name == "dictaphone.json" else source
+        lock["stages"][f"s{i}"] = {"outs": [{"path": out, "md5": f"{i:032x}"}]}
+    (tmp_path / "dvc.lock").write_text(json.dumps(lock))  # JSON is YAML
+    demo = tmp_path / "snapshot"
+    summarize.snapshot(tmp_path, demo)
+    provenance = json.loads((demo / "provenance.json").read_text())
+    assert provenance["dictaphone.json"]["dvc_out"] == "reports/dictaphone"
+    assert all(p["dvc_md5"] for p in provenance.values())
+    assert summarize.demo_markdown(demo) == summarize.demo_markdown(summarize.DEMO)
+
+
+def test_bad_inputs_are_named(tmp_path):
+    results = tmp_path / "results"
+    results.mkdir()
+    (results / "bench_dmp.json").write_text("{not json")
+    with pytest.raises(summarize.SummaryError, match="bench_dmp.json: not readable JSON"):
+        summarize.benchmark_rows(results)
+    (results / "bench_dmp.json").write_text("{}")
+    with pytest.raises(summarize.SummaryError, match="bench_dmp.json: unexpected content"):
+        summarize.benchmark_rows(results)
+    with pytest.raises(summarize.SummaryError, match="no <!-- generated:demo -->"):
+        summarize.fill_block("# README without blocks\n", "demo", "x")
+    with pytest.raises(summarize.SummaryError, match="missing"):
+        summarize.demo_markdown(tmp_path)
