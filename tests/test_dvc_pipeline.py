@@ -12,7 +12,7 @@ from tests.conftest import BIN, REPO, run_cli
 def _small_repo(tmp_path: Path) -> Path:
     """A git+DVC copy of the project's pipeline files with a small data config."""
     repo = tmp_path / "repo"
-    ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
+    ignore = shutil.ignore_patterns("__pycache__", "*.pyc", "cache", "tmp")
     for item in ("conf", "src", ".dvc", "dvc.yaml", ".dvcignore", "params.yaml"):
         src = REPO / item
         if src.is_dir():
@@ -20,7 +20,6 @@ def _small_repo(tmp_path: Path) -> Path:
         else:
             repo.mkdir(exist_ok=True)
             shutil.copy2(src, repo / item)
-    shutil.rmtree(repo / ".dvc" / "tmp", ignore_errors=True)
     syn = repo / "conf/data/synthetic.yaml"
     cfg = yaml.safe_load(syn.read_text())
     cfg["synthetic"]["n_writers"] = 5
@@ -58,3 +57,15 @@ def test_dvc_repro_prepare_equals_prg_prepare_and_is_idempotent(tmp_path):
     assert "didn't change" in second.stdout or "up to date" in second.stdout, second.stdout
     metrics = _dvc(repo, "metrics", "show")
     assert "train_samples" in metrics.stdout
+
+    # a DVC remote (a folder here; s3://, ssh://, ... alike) restores the outputs elsewhere
+    originals = {p.name: p.read_bytes() for p in by_dvc.iterdir() if p.is_file()}
+    assert _dvc(repo, "remote", "add", "-d", "store", str(tmp_path / "remote")).returncode == 0
+    pushed = _dvc(repo, "push")
+    assert pushed.returncode == 0, pushed.stdout + pushed.stderr
+    shutil.rmtree(repo / "data")
+    shutil.rmtree(repo / ".dvc" / "cache")
+    pulled = _dvc(repo, "pull", "prepare")
+    assert pulled.returncode == 0, pulled.stdout + pulled.stderr
+    assert {p.name: p.read_bytes() for p in by_dvc.iterdir() if p.is_file()} == originals
+    assert "up to date" in _dvc(repo, "status", "prepare").stdout
