@@ -256,3 +256,18 @@ def test_connection_colours_are_distinct_for_long_words():
     colours = distinct_colours(40)
     assert colours.shape == (40, 3) and colours.dtype == np.uint8
     assert len({tuple(c) for c in colours}) == 40
+
+
+def test_framing_bounds_hold_every_point_with_a_margin():
+    from prg.recording import framing
+
+    rng = np.random.default_rng(0)
+    for scale in (0.01, 1.0, 30.0):
+        pts = rng.normal(size=(50, 2)) * scale + rng.normal(size=2) * 10
+        bounds = framing(pts, margin=0.1)
+        (stored,) = bounds.range.as_arrow_array().to_pylist()
+        (x0, x1), (y0, y1) = stored["x_range"], stored["y_range"]
+        assert x0 < pts[:, 0].min() and x1 > pts[:, 0].max()
+        assert y0 < pts[:, 1].min() and y1 > pts[:, 1].max()
+        pad = 0.1 * max(np.ptp(pts, axis=0).max(), 1.0)
+        assert np.isclose(x0, pts[:, 0].min() - pad) and np.isclose(y1, pts[:, 1].max() + pad)

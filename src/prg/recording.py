@@ -394,6 +394,17 @@ def _flip(points: np.ndarray) -> np.ndarray:
     return np.asarray(points, dtype=np.float64) * Y_SIGN
 
 
+def framing(points: np.ndarray, margin: float = 0.15) -> rrb.VisualBounds2D:
+    """2D view bounds around ``points`` (already y-flipped) with a relative margin, so the
+    viewer opens on the whole word rather than on its own guess."""
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    low, high = pts.min(axis=0), pts.max(axis=0)
+    pad = margin * max(float((high - low).max()), 1.0)
+    return rrb.VisualBounds2D(
+        x_range=[low[0] - pad, high[0] + pad], y_range=[low[1] - pad, high[1] + pad]
+    )
+
+
 def _names(chars: Sequence[str]) -> list[str]:
     width = len(str(max(len(chars) - 1, 0)))
     return [f"{i:0{width}d}_{c}" for i, c in enumerate(chars)]
@@ -645,6 +656,7 @@ def write_blueprint(
         origin="word",
         name=f"Word: {word.text}",
         background=PAPER,
+        visual_bounds=framing(_flip(word.points)),
         overrides={"word/rollout/path": [trail, rr.LineStrips2D.from_fields().visualizer()]},
     )
     left = [word_view]

@@ -54,7 +54,7 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
-from prg.recording import Y_SIGN, recording_stream
+from prg.recording import Y_SIGN, framing, recording_stream
 from prg.sim.geometry import runs
 from prg.sim.robots import RobotConfig
 from prg.sim.scene import TABLE_TOP_Z
@@ -158,6 +158,7 @@ def sim_blueprint(result: SimResult) -> rrb.Blueprint:
         origin="page",
         name="Ink on the page (cm)",
         background=(255, 255, 255),
+        visual_bounds=framing(np.concatenate(result.plan.strokes()) * Y_SIGN),
         overrides={"page/ink": [trail, rr.LineStrips2D.from_fields().visualizer()]},
     )
     side = [page]

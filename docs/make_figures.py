@@ -1,0 +1,152 @@
+"""The README's figures, from the demo MUSE (models/muse/model.ckpt, made by `make demo`):
+
+    python docs/make_figures.py
+
+docs/figures/word.png: "hello" from its labels (conf/write.yaml's settings, as `prg-write
+text=hello`): letters, connection strokes, the DMP's rollout. docs/figures/robot.png: the Panda
+writing "joy" (as `prg-simulate text=joy scale=6`), a TinyRenderer 3/4 view with a close-up of
+the page. docs/figures/README.md: captions naming the checkpoint and its SHA-256. Atomic writes.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+CKPT = ROOT / "models" / "muse" / "model.ckpt"
+OUT = ROOT / "docs" / "figures"
+WORD, ROBOT_WORD, SCALE = "hello", "joy", 6.0  # SCALE: the robot's word, enlarged to be seen
+EYE, TARGET = (-0.4, 1.0, 1.45), (0.42, 0.02, 0.85)  # world (m): the arm, table and page
+CLOSE_EYE, CLOSE_TARGET = (0.31, 0.11, 0.82), (0.55, -0.01, 0.6255)  # the page, near the pen
+LIGHT, SUPERSAMPLE, INK_MM = (-0.2, 0.5, 1.0), 2, 3.5  # ink drawn wide to show at this size
+
+
+def save_atomic(path: Path, save) -> None:
+    """``save(tmp)`` to a temporary file beside ``path`` (same suffix), then rename it."""
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
+    try:
+        save(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def word_figure(model, params, path: Path) -> str:
+    """``WORD``: letters (black), connection strokes (red); beside it the DMP's rollout by time."""
+    from matplotlib.collections import LineCollection
+
+    from prg.data.figures import pyplot
+    from prg.pipeline.generate import label_inputs, rest_to_rest_samples, write_word
+
+    word, rollout = write_word(model, WORD, label_inputs(WORD), params)
+    p = params
+    target, _ = rest_to_rest_samples(word.points, p.speed_cm_s, p.ramp_s, p.samples_per_s)
+    rmse_mm = 10 * float(np.sqrt(np.mean(np.sum((rollout - target) ** 2, axis=1))))
+    plt = pyplot()
+    fig, (left, right) = plt.subplots(1, 2, figsize=(9, 3), dpi=100, layout="constrained")
+    for kind, pts in word.polylines():
+        colour = {"letter": "black", "connection": "tab:red"}.get(kind, "grey")
+        left.plot(*pts.T, color=colour, lw=2.5, solid_capstyle="round", solid_joinstyle="round")
+    left.set_title("letters (black) and connection strokes (red)", fontsize=10)
+    t = np.linspace(0.0, word.duration_s, len(rollout))
+    segments = np.stack([rollout[:-1], rollout[1:]], axis=1)
+    lines = LineCollection(segments, array=t[:-1], cmap="viridis", lw=2.5, capstyle="round")
+    right.add_collection(lines)
+    right.set_title("one DMP's rollout", fontsize=10)
+    bar = fig.colorbar(lines, ax=right, shrink=0.7, aspect=15, pad=0.01)
+    bar.set_label("time (s)")
+    for ax in (left, right):
+        ax.set_xlim(word.points[:, 0].min() - 0.3, word.points[:, 0].max() + 0.3)
+        ax.set_ylim(word.points[:, 1].min() - 0.3, word.points[:, 1].max() + 0.3)
+        ax.set_aspect("equal")
+        ax.axis("off")
+    save_atomic(path, lambda tmp: fig.savefig(tmp, dpi=100, metadata={"Software": None}))
+    plt.close(fig)
+    return (
+        f'"{WORD}" written by the demo MUSE from its letters\' labels: {len(word.points)} points, '
+        f"{word.path_length:.1f} cm of pen path in {word.duration_s:.1f} s; one DMP with "
+        f"{word.dmp['n_basis']} basis functions reproduces it with RMSE {rmse_mm:.3f} mm."
+    )
+
+
+def robot_figure(model, params, cfg, path: Path) -> str:
+    """The Panda near the end of ``ROBOT_WORD``: a 3/4 view and, inset, a close-up of the page."""
+    from PIL import Image
+
+    from prg.pipeline.generate import label_inputs, write_word
+    from prg.sim import Scene, simulate_word
+    from prg.sim.geometry import runs
+    from prg.sim.ink import draw_strokes
+    from prg.simulate import settings_from_config
+
+    robot, settings = settings_from_config(cfg)
+    word, _ = write_word(model, ROBOT_WORD, label_inputs(ROBOT_WORD), params)
+    result = simulate_word(word, robot, settings, render=False)
+    inked = np.flatnonzero(result.contact)
+    step = inked[int(0.9 * (len(inked) - 1))]  # pen down, 90 % of the ink on the page
+    contact = result.contact.copy()
+    contact[step + 1 :] = False
+    # every 6th ink sample: PIL's wide lines get ragged over many sub-pixel segments
+    strokes = [
+        np.vstack([result.tip_paper[a:b:6, :2], result.tip_paper[b - 1, :2]])
+        for a, b in runs(contact)
+    ]
+    w, h = settings.paper.size_cm
+    page = draw_strokes(strokes, (-w / 2, -h / 2), (round(w * 40), round(h * 40)), 40, INK_MM)
+    k = SUPERSAMPLE
+    with Scene(robot, settings.paper) as scene:
+        q = scene.robot.rest_movable.copy()
+        q[list(scene.robot.arm_in_movable)] = result.q[step]
+        scene.reset(q)
+        scene.show_ink(page)
+        view = scene.render_view(EYE, TARGET, (900 * k, 600 * k), 40.0, light_direction=LIGHT)
+        close = scene.render_view(
+            CLOSE_EYE, CLOSE_TARGET, (330 * k, 220 * k), 40.0, light_direction=LIGHT
+        )
+    image = Image.fromarray(view).resize((900, 600), Image.LANCZOS)
+    image.paste((90, 90, 90), (8, 8, 342, 232))  # the inset's frame
+    image.paste(Image.fromarray(close).resize((330, 220), Image.LANCZOS), (10, 10))
+    save_atomic(path, image.save)
+    m = result.metrics
+    return (
+        f'The simulated Franka Panda (PyBullet, TinyRenderer) writing "{ROBOT_WORD}" from the demo '
+        f"MUSE at {SCALE:g}x its size ({m['word_width_cm']:.1f} x {m['word_height_cm']:.1f} cm); "
+        f"inset: the page near the pen (ink drawn {INK_MM} mm wide). Tracking error mean "
+        f"{m['tracking_error_mean_mm']:.3f} mm, max {m['tracking_error_max_mm']:.3f} mm."
+    )
+
+
+def main() -> None:
+    if not CKPT.is_file():
+        sys.exit(f"make_figures: {CKPT.relative_to(ROOT)} is missing: run `make demo` first")
+    start = time.perf_counter()
+    from prg.cli import compose_config
+    from prg.models.checkpoint import load_model
+    from prg.write import params_from_config
+
+    digest = hashlib.sha256(CKPT.read_bytes()).hexdigest()[:12]
+    cfg = compose_config("simulate", [f"scale={SCALE}"])
+    params = params_from_config(cfg)
+    model, _ = load_model(CKPT)
+    OUT.mkdir(parents=True, exist_ok=True)
+    word_caption = word_figure(model, params, OUT / "word.png")
+    robot_caption = robot_figure(model, params, cfg, OUT / "robot.png")
+    text = (
+        "# Figures\n\nGenerated by `python docs/make_figures.py` from "
+        f"`{CKPT.relative_to(ROOT)}` (SHA-256 `{digest}...`); do not edit by hand.\n\n"
+        f"![word](word.png)\n\n**word.png.** {word_caption}\n\n"
+        f"![robot](robot.png)\n\n**robot.png.** {robot_caption}\n"
+    )
+    save_atomic(OUT / "README.md", lambda tmp: tmp.write_text(text, encoding="utf-8"))
+    print(f"docs/figures: word.png, robot.png, README.md in {time.perf_counter() - start:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
