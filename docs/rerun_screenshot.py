@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import os
 import shutil
+import signal
 import socket
 import subprocess
 import sys
@@ -43,7 +44,10 @@ def screenshot(rrd: Path, out: Path, settle_s: float, size: tuple[int, int]) -> 
     grpc, web = free_port(), free_port()
     rerun = shutil.which("rerun") or str(Path(sys.executable).with_name("rerun"))
     command = [rerun, "--web-viewer", "--web-viewer-port", str(web), "--port", str(grpc), str(rrd)]
-    server = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    # its own process group: the `rerun` script starts the viewer binary as a child
+    server = subprocess.Popen(
+        command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True
+    )
     try:
         wait_for_port(web, 30)
         wait_for_port(grpc, 30)
@@ -63,7 +67,7 @@ def screenshot(rrd: Path, out: Path, settle_s: float, size: tuple[int, int]) -> 
             os.replace(tmp, out)
             browser.close()
     finally:
-        server.terminate()
+        os.killpg(server.pid, signal.SIGTERM)
         server.wait(timeout=10)
 
 
