@@ -79,28 +79,53 @@ def test_same_seed_same_first_epoch_losses(tmp_path, small_dataset):
     assert a.metrics["val/loss"] == b.metrics["val/loss"]
 
 
-@pytest.mark.parametrize("launcher", ["basic", "joblib"])
-def test_multirun_jobs_land_under_one_parent_run(tmp_path, small_dataset, launcher):
-    args = [
-        "-m",
+SWEEPS = {
+    "basic": ["model=cvae,avae_ts"],
+    # 2 workers writing to one SQLite store at once
+    "joblib": [
         "model=cvae,avae_ts",
+        "seed=0,1",
+        "hydra/launcher=joblib",
+        "hydra.launcher.n_jobs=2",
+    ],
+}
+
+
+@pytest.mark.parametrize("launcher", SWEEPS)
+def test_multirun_jobs_land_under_one_parent_run(tmp_path, small_dataset, launcher):
+    result = run_cli(
+        "prg-train",
+        "-m",
+        *SWEEPS[launcher],
         f"paths.root_dir={tmp_path}",
         f"paths.data_dir={small_dataset}",
-        *FAST,
         "trainer.max_epochs=1",
-    ]
-    if launcher == "joblib":
-        args += ["hydra/launcher=joblib", "hydra.launcher.n_jobs=2"]
-    result = run_cli("prg-train", *args, timeout=600)
+        "trainer.limit_train_batches=3",
+        "trainer.limit_val_batches=2",
+        "trainer.enable_progress_bar=false",
+        "~callbacks.figures",
+        timeout=900,
+    )
     assert result.returncode == 0, result.stderr[-3000:]
+    logs = [p.read_text() for p in (tmp_path / "logs").rglob("*.log")]
+    assert not any("database is locked" in t for t in [result.stdout, result.stderr, *logs])
     client = _client(tmp_path)
     runs = client.search_runs([client.get_experiment_by_name("prg").experiment_id])
-    parents = [r for r in runs if r.data.tags.get("prg.sweep") == "parent"]
-    children = [r for r in runs if r.data.tags.get("mlflow.parentRunId")]
-    assert len(parents) == 1 and len(children) == 2
-    assert {c.data.tags["mlflow.parentRunId"] for c in children} == {parents[0].info.run_id}
-    assert {c.data.tags["prg.family"] for c in children} == {"cvae", "avae_ts"}
-    assert all(c.info.status == "FINISHED" for c in children)
+    (parent,) = [r for r in runs if r.data.tags.get("prg.sweep") == "parent"]
+    children = [r for r in runs if r is not parent]
+    jobs = {(c.data.tags["prg.family"], c.data.tags["prg.seed"]) for c in children}
+    expected = {("cvae", "0"), ("avae_ts", "0")}
+    if launcher == "joblib":
+        expected |= {("cvae", "1"), ("avae_ts", "1")}
+    assert len(children) == len(expected) and jobs == expected
+    assert {c.data.tags.get("mlflow.parentRunId") for c in children} == {parent.info.run_id}
+    assert parent.info.status == "FINISHED"
+    for child in children:
+        assert child.info.status == "FINISHED"
+        assert {"train/loss", "val/loss"} <= set(child.data.metrics)
+        assert [a.path for a in client.list_artifacts(child.info.run_id, "checkpoints")] == [
+            "checkpoints/best.ckpt"
+        ]
 
 
 BAD = [

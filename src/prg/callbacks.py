@@ -1,4 +1,4 @@
-"""Lightning callbacks: MLflow run bookkeeping and generation figures."""
+"""Lightning callbacks: the checkpoint to resume from, MLflow run bookkeeping, generation figures."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 import lightning as L
+from lightning.pytorch.callbacks import Checkpoint, ModelCheckpoint
 from lightning.pytorch.loggers import MLFlowLogger
 
 log = logging.getLogger(__name__)
@@ -17,6 +18,85 @@ log = logging.getLogger(__name__)
 
 def _mlflow(trainer: L.Trainer) -> MLFlowLogger | None:
     return next((lg for lg in trainer.loggers if isinstance(lg, MLFlowLogger)), None)
+
+
+def best_checkpoint(trainer: L.Trainer) -> str:
+    """Path of the best checkpoint of the run's ``ModelCheckpoint`` ("" when none)."""
+    best = next((c for c in trainer.callbacks if isinstance(c, ModelCheckpoint)), None)
+    return best.best_model_path if best else ""
+
+
+class LastCheckpoint(Checkpoint):
+    """Keeps ``<dirpath>/last.ckpt``, the checkpoint to resume from after a crash or a kill
+    (``prg-train ... ckpt_path=last``). It is written
+
+    * every ``every_n_train_steps`` optimizer steps inside an epoch (0: never), so a kill loses
+      at most that many steps; Lightning resumes such a checkpoint mid-epoch, running only the
+      epoch's remaining batches;
+    * at the end of every epoch, after validation and after the module has computed the epoch's
+      means (a :class:`Checkpoint` runs its epoch-end hook after the module's), so a resumed run
+      logs no epoch twice (except after a kill in the fraction of a second between the logging
+      of an epoch's ``val/*`` and this save: that epoch's ``val/*`` then appears twice, at the
+      same step);
+    * at the end of training, when that is not an epoch end (``trainer.max_steps``).
+
+    The file is written next to its final name and moved into place, so a kill during a write
+    leaves the previous ``last.ckpt`` intact. The per-epoch loss sums the module has accumulated
+    so far travel in the checkpoint, so the interrupted epoch's ``train/*`` averages all of its
+    batches. The training loader is not resumable, so the remaining batches of an interrupted
+    epoch come from a fresh shuffle (Lightning warns about it) and a resumed run's losses are
+    close to, not equal to, an uninterrupted run's. (Lightning's ``ModelCheckpoint(save_last=True)``
+    is not used for this: since Lightning 2.6 it refreshes ``last.ckpt`` only when a top-k
+    checkpoint is saved, that is when the monitored loss improves.)
+    """
+
+    FILENAME = "last.ckpt"
+
+    def __init__(self, dirpath: str | os.PathLike, every_n_train_steps: int = 0):
+        if isinstance(every_n_train_steps, bool) or not isinstance(every_n_train_steps, int):
+            raise TypeError(f"every_n_train_steps must be an integer, got {every_n_train_steps!r}")
+        if every_n_train_steps < 0:
+            raise ValueError(f"every_n_train_steps must be >= 0, got {every_n_train_steps}")
+        self.path = Path(dirpath) / self.FILENAME
+        self.every_n_train_steps = every_n_train_steps
+        self._saved_step = -1
+
+    def save(self, trainer: L.Trainer) -> None:
+        tmp = self.path.with_name(f".{self.FILENAME}.tmp")
+        trainer.save_checkpoint(tmp)  # every rank calls it; the strategy writes on rank 0
+        if trainer.is_global_zero:
+            os.replace(tmp, self.path)
+        trainer.strategy.barrier("LastCheckpoint.save")
+        self._saved_step = trainer.global_step
+
+    def on_train_batch_end(self, trainer, pl_module, outputs, batch, batch_idx) -> None:
+        every = self.every_n_train_steps
+        last_batch = trainer.fit_loop.epoch_loop.batch_progress.is_last_batch
+        if every and trainer.global_step % every == 0 and not last_batch:
+            self.save(trainer)  # at the last batch, the epoch-end save follows validation
+
+    def on_train_epoch_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
+        self.save(trainer)
+
+    def on_train_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
+        if trainer.global_step != self._saved_step:
+            self.save(trainer)
+
+    def on_save_checkpoint(self, trainer, pl_module, checkpoint: dict[str, Any]) -> None:
+        # PRGModule sums each loss term over an epoch's batches and logs the means at its end
+        checkpoint["prg_epoch_sums"] = {
+            "sums": getattr(pl_module, "_sums", {}),
+            "counts": getattr(pl_module, "_counts", {}),
+        }
+
+    def on_load_checkpoint(self, trainer, pl_module, checkpoint: dict[str, Any]) -> None:
+        state = checkpoint.get("prg_epoch_sums")
+        if state is not None and hasattr(pl_module, "_sums"):
+            pl_module._sums = {
+                split: {k: v.to(pl_module.device) for k, v in terms.items()}
+                for split, terms in state["sums"].items()
+            }
+            pl_module._counts = dict(state["counts"])
 
 
 class MLflowRun(L.Callback):
@@ -34,16 +114,18 @@ class MLflowRun(L.Callback):
         self.params = params or {}
         self.register_as = register_as
 
-    def on_fit_start(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
+    def on_train_start(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
+        # on_train_start, not on_fit_start: a resumed trainer's global_step is restored by now
         logger = _mlflow(trainer)
         if logger is None or trainer.global_rank != 0:
             return
         client, run_id = logger.experiment, logger.run_id
-        logged = client.get_run(run_id).data.params  # non-empty when resuming this run
+        logged = client.get_run(run_id).data.params
+        resumed = bool(client.list_artifacts(run_id, "config"))  # this run was started before
+        if resumed:  # a killed run stays RUNNING, a crashed one FAILED: running again now
+            client.update_run(run_id, status="RUNNING")
         name = (
-            "config/config.yaml"
-            if not logged
-            else f"config/config-resume-{trainer.global_step}.yaml"
+            f"config/config-resume-{trainer.global_step}.yaml" if resumed else "config/config.yaml"
         )
         if self.config_yaml:
             client.log_text(run_id, self.config_yaml, name)
@@ -61,7 +143,7 @@ class MLflowRun(L.Callback):
 
     def on_fit_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
         logger = _mlflow(trainer)
-        best = trainer.checkpoint_callback.best_model_path if trainer.checkpoint_callback else ""
+        best = best_checkpoint(trainer)
         if logger is None or trainer.global_rank != 0 or not best or not Path(best).is_file():
             return
         logger.experiment.log_artifact(logger.run_id, best, "checkpoints")

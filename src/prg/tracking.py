@@ -4,6 +4,12 @@ Default store: ``sqlite:///<root>/mlruns.db`` with artifacts in ``<root>/mlartif
 ``MLFLOW_TRACKING_URI`` overrides the store (any server). Review runs with
 ``mlflow ui --backend-store-uri sqlite:///mlruns.db``.
 
+Several processes may write to one SQLite store at once (parallel sweep jobs): the default URI
+waits up to 60 s for a lock (``?timeout=60``; MLflow's own sessions wait 20 s), and a new
+store's tables are created by one process at a time (:func:`mlflow_client`). On a tracking
+server (``http(s)://``) the server decides where artifacts go: experiments are created without
+a local ``file://`` artifact location, and artifacts are uploaded through the server.
+
 A Hydra multirun groups its jobs under one parent run: :class:`SweepParentRun` (a Hydra
 callback, enabled in ``conf/hydra/default.yaml``) opens the parent when the sweep starts and
 exports its id in ``PRG_PARENT_RUN_ID``; each job's run is tagged ``mlflow.parentRunId``.
@@ -13,6 +19,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -28,9 +35,18 @@ def artifact_location(path: str | os.PathLike) -> str:
     return Path(path).expanduser().resolve().as_uri()
 
 
+SQLITE_TIMEOUT_S = 60
+
+
 def sqlite_uri(path: str | os.PathLike) -> str:
-    """``sqlite:///`` URI of a database file (absolute, so any working directory works)."""
-    return "sqlite:///" + str(Path(path).expanduser().resolve())
+    """``sqlite:///`` URI of a database file (absolute, so any working directory works) that
+    waits up to :data:`SQLITE_TIMEOUT_S` for another process's lock (pysqlite ``timeout``)."""
+    return f"sqlite:///{Path(path).expanduser().resolve()}?timeout={SQLITE_TIMEOUT_S}"
+
+
+def is_server(uri: str) -> bool:
+    """Whether ``uri`` is a tracking server (which stores artifacts itself)."""
+    return uri.startswith(("http://", "https://"))
 
 
 def tracking_uri(configured: str | None, root_dir: str | os.PathLike) -> str:
@@ -42,13 +58,41 @@ def tracking_uri(configured: str | None, root_dir: str | os.PathLike) -> str:
     )
 
 
-def get_experiment_id(client, name: str, artifacts: str) -> str:
+_READY: set[str] = set()
+
+
+def mlflow_client(uri: str):
+    """An ``MlflowClient`` on ``uri``; a SQLite store's tables are created under a file lock.
+
+    MLflow creates a new store's schema on first contact; processes doing that at the same time
+    on one new file fail (``duplicate column name``), so they open stores in turns, the first
+    time in each process.
+    """
+    from mlflow import MlflowClient
+
+    if not uri.startswith("sqlite:") or uri in _READY:
+        return MlflowClient(uri)
+    import fcntl
+
+    # one lock for all stores (opening one is quick); per user, as /tmp files are not shared
+    with open(Path(tempfile.gettempdir()) / f"prg-mlflow-{os.getuid()}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        client = MlflowClient(uri)
+        client.search_experiments(max_results=1)  # the store (and its tables) exist now
+    _READY.add(uri)
+    return client
+
+
+def get_experiment_id(client, name: str, artifacts: str | None) -> str:
     """Id of the experiment ``name``, created (with its artifact location) if missing.
 
-    Tolerates a concurrent creation by another sweep job.
+    On a tracking server the location is the server's (``artifacts`` is ignored). Tolerates a
+    concurrent creation by another sweep job.
     """
     from mlflow.exceptions import MlflowException
 
+    if is_server(client.tracking_uri):
+        artifacts = None
     for _ in range(5):
         experiment = client.get_experiment_by_name(name)
         if experiment is not None:
@@ -63,9 +107,7 @@ def get_experiment_id(client, name: str, artifacts: str) -> str:
 def task_client(cfg: Any) -> tuple[Any, str]:
     """An ``MlflowClient`` on the configured store and the id of the configured experiment
     (``cfg.logger``, ``cfg.paths.root_dir``), for commands that log runs themselves."""
-    from mlflow import MlflowClient
-
-    client = MlflowClient(tracking_uri(cfg.logger.get("tracking_uri"), cfg.paths.root_dir))
+    client = mlflow_client(tracking_uri(cfg.logger.get("tracking_uri"), cfg.paths.root_dir))
     experiment = get_experiment_id(
         client, cfg.logger.experiment_name, artifact_location(cfg.logger.artifact_location)
     )
@@ -82,15 +124,13 @@ def mlflow_logger(
 ):
     """A Lightning ``MLFlowLogger`` on an explicit store (never the default ./mlruns)."""
     from lightning.pytorch.loggers import MLFlowLogger
-    from mlflow import MlflowClient
 
-    client = MlflowClient(tracking_uri)
-    get_experiment_id(client, experiment_name, artifact_location)
+    get_experiment_id(mlflow_client(tracking_uri), experiment_name, artifact_location)
     return MLFlowLogger(
         experiment_name=experiment_name,
         run_name=None if run_id else run_name,
         tracking_uri=tracking_uri,
-        artifact_location=artifact_location,
+        artifact_location=None if is_server(tracking_uri) else artifact_location,
         run_id=run_id,
         tags=None if run_id else tags,
         log_model=False,
@@ -126,12 +166,12 @@ class SweepParentRun(HydraCallback):
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
         if not self.enabled or "logger" not in config or os.environ.get(PARENT_ENV):
             return
-        from mlflow import MlflowClient
-
         uri = tracking_uri(config.logger.get("tracking_uri"), config.paths.root_dir)
-        self.client = MlflowClient(uri)
+        self.client = mlflow_client(uri)
         experiment_id = get_experiment_id(
-            self.client, config.logger.experiment_name, config.logger.artifact_location
+            self.client,
+            config.logger.experiment_name,
+            artifact_location(config.logger.artifact_location),
         )
         overrides = " ".join(config.hydra.overrides.task)
         run = self.client.create_run(

@@ -5,6 +5,16 @@ Examples
 ``prg-train model=muse experiment=quick``
 ``prg-train -m model=cvae,avae_ts,avae_ti,muse seed=0,1 experiment=quick``
 ``prg-train model=muse ckpt_path=checkpoints/prg/muse-seed0/last.ckpt``   resume, same MLflow run
+``prg-train model=muse ckpt_path=last``   the same: ``${checkpoint_dir}/last.ckpt`` of this run
+
+Resuming after a crash or a kill: ``ckpt_path=last`` resolves to ``${checkpoint_dir}/last.ckpt``
+(a one-line usage error, exit 2, when there is none). ``last.ckpt`` is refreshed every
+``callbacks.last.every_n_train_steps`` steps inside an epoch, at the end of each epoch and at the
+end of training (:class:`prg.callbacks.LastCheckpoint`), so a kill loses at most that many steps.
+The resumed run finishes the interrupted epoch's remaining batches, continues the same MLflow
+run (its id travels in the checkpoint) and marks it FINISHED at the end. Metrics are logged once
+per epoch, at the epoch's last step, so the run's history has each epoch once (see
+``LastCheckpoint`` for the one sub-second window where a kill leaves an epoch's ``val/*`` twice).
 """
 
 from __future__ import annotations
@@ -103,6 +113,17 @@ def _manifest(cfg: DictConfig) -> tuple[dict[str, Any], str]:
     return json.loads(path.read_text()), file_sha256(path)
 
 
+def _resolve_ckpt_path(cfg: DictConfig) -> str | None:
+    """``ckpt_path``, with ``last`` meaning ``${checkpoint_dir}/last.ckpt``, which must exist."""
+    path = cfg.get("ckpt_path")
+    if path != "last":
+        return str(path) if path else None
+    last = Path(cfg.checkpoint_dir) / "last.ckpt"
+    if not last.is_file():
+        raise UsageError(f"ckpt_path=last: no checkpoint {last} to resume from")
+    return str(last)
+
+
 def train(cfg: DictConfig) -> TrainResult:
     """Task: fit ``cfg.model`` on ``cfg.data`` with MLflow tracking and fixed-path checkpoints."""
     # mlflow.set_tracking_uri (called by Lightning's logger) exports MLFLOW_TRACKING_URI; keep
@@ -121,13 +142,13 @@ def _train(cfg: DictConfig) -> TrainResult:
     _check_modalities(cfg)
     _check_numbers(cfg)
     manifest, manifest_hash = _manifest(cfg)
-    resume = None
-    if cfg.get("ckpt_path"):
-        resume = read_checkpoint(cfg.ckpt_path)
+    resume, ckpt_path = None, _resolve_ckpt_path(cfg)
+    if ckpt_path:
+        resume = read_checkpoint(ckpt_path)
         family = resume["hyper_parameters"]["model"]["_target_"]
         if family != cfg.model.module.model._target_:
             raise UsageError(
-                f"checkpoint {cfg.ckpt_path} holds a {family} model, not {cfg.model.name} "
+                f"checkpoint {ckpt_path} holds a {family} model, not {cfg.model.name} "
                 f"({cfg.model.module.model._target_}): pass the matching model=..."
             )
     L.seed_everything(cfg.seed, workers=True)
@@ -163,8 +184,8 @@ def _train(cfg: DictConfig) -> TrainResult:
         run_id=(resume or {}).get("mlflow_run_id"),
         tags=tags,
     )
-    callbacks = [_build(c, f"callbacks.{name}") for name, c in cfg.callbacks.items()]
-    from prg.callbacks import MLflowRun
+    callbacks = [_build(c, f"callbacks.{name}") for name, c in cfg.callbacks.items() if c]
+    from prg.callbacks import LastCheckpoint, MLflowRun, best_checkpoint
 
     callbacks.append(
         MLflowRun(
@@ -174,13 +195,12 @@ def _train(cfg: DictConfig) -> TrainResult:
         )
     )
     trainer: L.Trainer = _build(cfg.trainer, "trainer", logger=logger, callbacks=callbacks)
-    trainer.fit(module, datamodule=datamodule, ckpt_path=cfg.get("ckpt_path"))
+    trainer.fit(module, datamodule=datamodule, ckpt_path=ckpt_path)
 
     metrics = {k: float(v) for k, v in trainer.callback_metrics.items()}
-    checkpoint = trainer.checkpoint_callback
-    best = checkpoint.best_model_path if checkpoint else ""
-    last = checkpoint.last_model_path if checkpoint else ""
-    if cfg.get("export_dir") and best:
+    best = best_checkpoint(trainer)
+    last = next((str(c.path) for c in callbacks if isinstance(c, LastCheckpoint)), "")
+    if cfg.get("export_dir") and best and trainer.is_global_zero:  # DDP: rank 0 only
         _export(Path(cfg.export_dir), best, metrics, logger.run_id, cfg)
     return TrainResult(module, trainer, metrics, logger.run_id, best, last)
 

@@ -75,9 +75,10 @@ class PRGModule(L.LightningModule):
 
     def _log_epoch(self, split: str) -> None:
         sums, count = self._sums.pop(split, {}), self._counts.pop(split, 0)
-        if count:
-            self.log_dict({f"{split}/{k}": v / count for k, v in sums.items() if k != "loss"})
-            self.log(f"{split}/loss", sums["loss"] / count, prog_bar=True)
+        if count:  # sync_dist: the mean over DDP ranks (equal shards); a no-op on one process
+            means = {f"{split}/{k}": v / count for k, v in sums.items() if k != "loss"}
+            self.log_dict(means, sync_dist=True)
+            self.log(f"{split}/loss", sums["loss"] / count, prog_bar=True, sync_dist=True)
 
     def on_train_epoch_end(self) -> None:
         self._log_epoch("train")
