@@ -8,7 +8,8 @@ Examples
 
 ``analyze``, ``power`` and ``simulate`` come from :mod:`studies.analysis.commands` when it is
 installed. A mistake the user can fix (:class:`prg.errors.UsageError`) is one line,
-``prg-study: error: <message>``, exit code 2; other :class:`prg.errors.PRGError` exit 1.
+``prg-study: error: <message>``, exit code 2; other :class:`prg.errors.PRGError` and an
+:class:`OSError` about a file or the disk (see :func:`prg.cli.os_error_message`) exit 1.
 """
 
 from __future__ import annotations
@@ -16,8 +17,10 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from typing import NoReturn
 
+from prg.cli import check_output, os_error_message
 from prg.errors import PRGError, UsageError
 
 PROG = "prg-study"
@@ -40,12 +43,13 @@ def build_command(args: argparse.Namespace) -> int:
     from studies.design import load_study
 
     config = load_study(args.config, args.set or [])
+    out = check_output(args.out or Path("studies") / config.name / "build", "--out")
     report = build_study(
         config,
         human_dirs=args.human or [],
         robot_dir=args.robot,
         ckpt=args.ckpt,
-        out_dir=args.out,
+        out_dir=out,
         progress=None if args.quiet else _say,
         pilot=args.pilot,
     )
@@ -159,6 +163,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except PRGError as err:
         print(f"{PROG}: error: {' '.join(str(err).split())}", file=sys.stderr)
         return err.exit_code
+    except OSError as err:
+        message = os_error_message(err)
+        if message is None:
+            raise
+        print(f"{PROG}: error: {message}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print(f"{PROG}: error: interrupted; nothing was written", file=sys.stderr)
         return 130

@@ -34,7 +34,7 @@ import numpy as np
 from omegaconf import DictConfig, OmegaConf
 from scipy.signal import spectrogram
 
-from prg.cli import hydra_command
+from prg.cli import check_output, hydra_command
 from prg.data.alphabet import char_to_label
 from prg.data.build import staged_outputs, write_json
 from prg.data.figures import pyplot
@@ -106,8 +106,16 @@ def dictaphone(cfg: DictConfig) -> dict[str, Any]:
     unknown = [c for c in cfg.channels if c not in CHANNELS]
     if unknown or not cfg.channels:
         raise UsageError(f"channels {list(cfg.channels)!r}: choose from {', '.join(CHANNELS)}")
+    speed = cfg.speed
+    if isinstance(speed, bool) or not isinstance(speed, int | float) or not 0 < speed < np.inf:
+        raise UsageError(f"speed must be a positive number of words per minute, got {speed!r}")
+    if not isinstance(cfg.voice, str) or not cfg.voice.strip():
+        raise UsageError(
+            f"voice must name an espeak-ng voice (espeak-ng --voices), got {cfg.voice!r}"
+        )
     params = params_from_config(cfg)
     settings = speech_settings(cfg)
+    out_dir = check_output(cfg.out_dir, "out_dir")
     ckpt = Path(cfg.ckpt) if cfg.ckpt else Path(cfg.models_dir) / cfg.family / "model.ckpt"
     model, _ = load_model(ckpt)
     test_path = Path(cfg.paths.data_dir) / "prepared" / cfg.data_name / "test.npz"
@@ -115,7 +123,6 @@ def dictaphone(cfg: DictConfig) -> dict[str, Any]:
         raise UsageError(f"test split {test_path} does not exist: run prg-prepare first")
     test = load_split(test_path) if "image" in cfg.channels else None
 
-    out_dir = Path(cfg.out_dir)
     rows, figure_inputs = [], {}
     with staged_outputs(out_dir) as staging:
         inputs_dir = staging / "inputs"

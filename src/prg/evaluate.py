@@ -27,7 +27,7 @@ import numpy as np
 import torch
 from omegaconf import DictConfig, OmegaConf
 
-from prg.cli import hydra_command
+from prg.cli import check_output, hydra_command
 from prg.data.alphabet import ALPHABET, NUM_CLASSES
 from prg.data.build import git_commit, staged_outputs, write_json
 from prg.data.store import load_split
@@ -407,6 +407,10 @@ def evaluate(cfg: DictConfig) -> Evaluation:
     data_dir = Path(cfg.paths.data_dir) / "prepared" / cfg.data.name
     classifier_cfg = OmegaConf.to_container(cfg.classifier, resolve=True)
     classifier_dir = Path(classifier_cfg.pop("dir"))
+    if parts == ["classifiers"]:
+        check_output(classifier_dir, "classifier.dir")
+    else:
+        check_output(cfg.report_dir, "report_dir")
     if parts == ["classifiers"]:
         ensure_classifiers(data_dir, classifier_dir, classifier_cfg, progress=cfg.progress)
         return result

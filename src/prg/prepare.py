@@ -15,7 +15,7 @@ from pathlib import Path
 
 from omegaconf import DictConfig
 
-from prg.cli import hydra_command
+from prg.cli import check_output, hydra_command
 from prg.data.build import BuildResult, build_dataset, dataset_metrics, write_json
 
 log = logging.getLogger(__name__)
@@ -23,6 +23,9 @@ log = logging.getLogger(__name__)
 
 def prepare(cfg: DictConfig) -> BuildResult:
     """Task: build ``${paths.data_dir}/prepared/${data.name}/`` from the composed config."""
+    check_output(cfg.paths.data_dir, "paths.data_dir")
+    if cfg.get("metrics_path"):
+        check_output(cfg.metrics_path, "metrics_path", folder=False)
     result = build_dataset(
         cfg.data,
         cfg.paths.data_dir,

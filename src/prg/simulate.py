@@ -25,6 +25,7 @@ wall time, their ratio, robot, word size), ``sim.rrd`` (Rerun: ``rerun sim.rrd``
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import shutil
 from pathlib import Path
@@ -33,7 +34,7 @@ from typing import Any
 import numpy as np
 from omegaconf import DictConfig, OmegaConf, open_dict
 
-from prg.cli import hydra_command
+from prg.cli import check_output, hydra_command
 from prg.data.build import staged_outputs, write_json
 from prg.errors import UsageError
 from prg.pipeline.word import WordTrajectory
@@ -57,8 +58,15 @@ def settings_from_config(cfg: DictConfig):
         SimSettings,
     )
 
-    def node(key: str) -> dict[str, Any]:
-        return OmegaConf.to_container(cfg[key], resolve=True)
+    def node(key: str, cls: type | None = None) -> dict[str, Any]:
+        """The config node ``key``; a numeric field of ``cls`` must hold a number."""
+        values = OmegaConf.to_container(cfg[key], resolve=True)
+        types = {f.name: f.type for f in dataclasses.fields(cls)} if cls else {}
+        for name, value in values.items():
+            kind = types.get(name)
+            if kind in ("int", "float") or (kind == "float | None" and value is not None):
+                _number(value, f"{key}.{name}")
+        return values
 
     paper = node("paper")
     word_centre = paper.pop("word_centre_cm")
@@ -68,23 +76,29 @@ def settings_from_config(cfg: DictConfig):
             paper=Paper(
                 size_cm=tuple(paper["size_cm"]),
                 centre=tuple(paper["centre"]),
-                yaw_deg=float(paper["yaw_deg"]),
-                thickness_m=float(paper["thickness_m"]),
+                yaw_deg=_number(paper["yaw_deg"], "paper.yaw_deg"),
+                thickness_m=_number(paper["thickness_m"], "paper.thickness_m"),
             ),
-            motion=MotionSettings(**node("motion")),
-            control=ControlSettings(**node("control")),
-            ik=IKSettings(**node("ik")),
-            camera=Camera(**node("camera")),
-            scale=float(cfg.scale),
+            motion=MotionSettings(**node("motion", MotionSettings)),
+            control=ControlSettings(**node("control", ControlSettings)),
+            ik=IKSettings(**node("ik", IKSettings)),
+            camera=Camera(**node("camera", Camera)),
+            scale=_number(cfg.scale, "scale"),
             word_centre_cm=tuple(word_centre),
-            tempo=float(cfg.tempo),
-            workspace_step_cm=float(cfg.workspace_step_cm),
+            tempo=_number(cfg.tempo, "tempo"),
+            workspace_step_cm=_number(cfg.workspace_step_cm, "workspace_step_cm"),
         )
     except (TypeError, ValueError, KeyError) as err:
         if isinstance(err, UsageError):
             raise
         raise UsageError(f"simulate settings: {err}") from None
     return robot, settings
+
+
+def _number(value: Any, key: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise UsageError(f"{key} must be a number, got {value!r}")
+    return float(value)
 
 
 def _write_word(cfg: DictConfig, out_dir: Path) -> WordTrajectory:
@@ -121,11 +135,11 @@ def simulate(cfg: DictConfig) -> tuple[Any, Path]:
             "(prg-write runs first; also audio=, images=, trajectories=)"
         )
     robot, settings = settings_from_config(cfg)
+    out_dir = check_output(cfg.out_dir, "out_dir")
     given = None
     if cfg.word is not None:
         given = Path(cfg.word)
         word = WordTrajectory.from_json(given)
-    out_dir = Path(cfg.out_dir)
     with staged_outputs(out_dir) as staging:
         if given is None:
             word = _write_word(cfg, staging / "word")

@@ -31,7 +31,7 @@ import lightning as L
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
-from prg.cli import hydra_command
+from prg.cli import check_output, hydra_command
 from prg.data.build import git_commit, write_json
 from prg.data.datamodule import PRGDataModule
 from prg.errors import UsageError
@@ -142,6 +142,9 @@ def _train(cfg: DictConfig) -> TrainResult:
     _check_modalities(cfg)
     _check_numbers(cfg)
     manifest, manifest_hash = _manifest(cfg)
+    check_output(cfg.checkpoint_dir, "checkpoint_dir")
+    if cfg.get("export_dir"):
+        check_output(cfg.export_dir, "export_dir")
     resume, ckpt_path = None, _resolve_ckpt_path(cfg)
     if ckpt_path:
         resume = read_checkpoint(ckpt_path)

@@ -33,7 +33,7 @@ import numpy as np
 import torch
 from omegaconf import DictConfig, OmegaConf
 
-from prg.cli import hydra_command
+from prg.cli import check_output, hydra_command
 from prg.data.build import staged_outputs
 from prg.errors import UsageError
 from prg.models.checkpoint import load_model
@@ -162,6 +162,7 @@ def write(cfg: DictConfig) -> tuple[WordTrajectory, Path]:
             "nothing to write: give text=WORD, audio=SOUND, images=PATH and/or trajectories=JSON"
         )
     params = params_from_config(cfg)
+    out_dir = check_output(cfg.out_dir, "out_dir")
     speech = None
     if cfg.audio is not None:  # before the model: a bad recording fails fast
         speech = speech_input(cfg.audio, speech_params_from_config(cfg))
@@ -183,7 +184,6 @@ def write(cfg: DictConfig) -> tuple[WordTrajectory, Path]:
     letters = decode_letters(model, inputs, params.temperature, params.seed)
     word, path = compose_word(letters, text, params)
     seconds = time.perf_counter() - start
-    out_dir = Path(cfg.out_dir)
     recording = None
     if cfg.record:
         images = inputs.get("image")

@@ -26,6 +26,7 @@ import math
 import sys
 from pathlib import Path
 
+from prg.cli import check_output, os_error_message
 from prg.errors import PRGError, UsageError
 
 KINDS = ("turing", "readability")
@@ -265,6 +266,7 @@ def run_analyze(args: argparse.Namespace) -> int:
         mixed_model=False if args.no_mixed else None,
     )
     out = check_out_dir(args.out or Path("reports") / "study" / Path(args.responses).stem)
+    check_output(out, "--out")
     analysis = analyze_file(args.responses, cfg)
     write_report(analysis, out, paper=not args.no_paper)
     for st in analysis.studies:
@@ -298,6 +300,8 @@ def run_power(args: argparse.Namespace) -> int:
 
     from studies.analysis import power as P
 
+    if args.out:
+        check_output(args.out, "--out", folder=False)
     icc = P.DEFAULT_ICC if args.icc is None else args.icc
     word_icc = P.DEFAULT_WORD_ICC if args.word_icc is None else args.word_icc
     if icc + word_icc > 0.5:
@@ -391,9 +395,24 @@ def run_power(args: argparse.Namespace) -> int:
     if args.out:
         out = Path(args.out)
         out.parent.mkdir(parents=True, exist_ok=True)
-        plan.to_csv(out, index=False)
+        _write_files(out, lambda path: plan.to_csv(path, index=False))
         print(f"plan: {out}")
     return 0
+
+
+def _write_files(*pairs) -> None:
+    """``path, write(tmp_path), path, write(tmp_path) ...``: every file written under a
+    temporary name first, then all renamed; a failure leaves none of them half-written."""
+    paths = [Path(p) for p in pairs[::2]]
+    temps = [p.with_name(f".{p.name}.tmp") for p in paths]
+    try:
+        for tmp, write in zip(temps, pairs[1::2], strict=True):
+            write(tmp)
+        for tmp, path in zip(temps, paths, strict=True):
+            tmp.replace(path)
+    finally:
+        for tmp in temps:
+            tmp.unlink(missing_ok=True)
 
 
 def _words(args: argparse.Namespace) -> list[str]:
@@ -431,6 +450,11 @@ def run_simulate(args: argparse.Namespace) -> int:
 
     if args.icc + args.word_icc > 0.5:
         raise UsageError(f"--icc {args.icc} plus --word-icc {args.word_icc} must be at most 0.5")
+    out = Path(args.out)
+    if out.suffix.lower() != ".csv":
+        raise UsageError(f"--out {out}: expected a .csv file name")
+    check_output(out, "--out", folder=False)
+    check_output(out.with_suffix(".truth.json"), "--out (its truth file)", folder=False)
     words = _words(args)
     common = dict(
         icc=args.icc,
@@ -456,15 +480,14 @@ def run_simulate(args: argparse.Namespace) -> int:
         frame, truth = simulate_readability(
             args.participants, args.true_rate, args.human_rate, **common
         )
-    out = Path(args.out)
-    if out.suffix.lower() != ".csv":
-        raise UsageError(f"--out {out}: expected a .csv file name")
     out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_name(f".{out.name}.tmp")
-    frame.to_csv(tmp, index=False)
-    tmp.replace(out)
     truth_path = out.with_suffix(".truth.json")
-    truth_path.write_text(json.dumps(truth.to_dict(), indent=2) + "\n", encoding="utf-8")
+    _write_files(
+        out,
+        lambda path: frame.to_csv(path, index=False),
+        truth_path,
+        lambda path: path.write_text(json.dumps(truth.to_dict(), indent=2) + "\n", "utf-8"),
+    )
     print(
         f"{len(frame)} rows from {args.participants + args.inattentive} participants: {out} (truth: {truth_path})"
     )
@@ -488,6 +511,12 @@ def main(argv: list[str] | None = None) -> int:
     except PRGError as err:
         print(f"prg-study: error: {' '.join(str(err).split())}", file=sys.stderr)
         return err.exit_code
+    except OSError as err:
+        message = os_error_message(err)
+        if message is None:
+            raise
+        print(f"prg-study: error: {message}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

@@ -57,19 +57,20 @@ class SyntheticConfig:
     points_per_unit: float = 2.0  # raw sampling density along the stroke (points per font unit)
 
     def __post_init__(self):
-        if self.n_writers < 1:
-            raise UsageError(f"data.synthetic.n_writers must be >= 1, got {self.n_writers}")
-        if self.samples_per_char < 1:
-            raise UsageError(
-                f"data.synthetic.samples_per_char must be >= 1, got {self.samples_per_char}"
-            )
+        for name in ("n_writers", "samples_per_char"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise UsageError(f"data.synthetic.{name} must be an integer >= 1, got {value!r}")
         unknown = [f for f in self.fonts if f not in FONTS]
         if unknown or not self.fonts:
             raise UsageError(
                 f"data.synthetic.fonts has {unknown or 'nothing'}: accepted are {list(FONTS)}"
             )
         for name in ("slant", "width", "size", "rotation_deg", "roundness", "jitter"):
-            lo, hi = getattr(self, name)
+            pair = getattr(self, name)
+            if len(pair) != 2 or not all(isinstance(v, int | float) for v in pair):
+                raise UsageError(f"data.synthetic.{name} must be [min, max] numbers, got {pair!r}")
+            lo, hi = pair
             if lo > hi:
                 raise UsageError(f"data.synthetic.{name} range [{lo}, {hi}] has min > max")
         if self.width[0] <= 0 or self.size[0] <= 0 or self.roundness[0] < 0 or self.jitter[0] < 0:

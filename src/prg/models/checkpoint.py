@@ -15,6 +15,8 @@ from prg.models.base import MultimodalVAE
 def read_checkpoint(path: str | os.PathLike) -> dict[str, Any]:
     """Load a Lightning checkpoint's dict, or raise a UsageError naming the file."""
     path = Path(path)
+    if path.is_dir():
+        raise UsageError(f"checkpoint {path} is a folder; give the .ckpt file inside it")
     if not path.is_file():
         raise UsageError(f"checkpoint {path} does not exist")
     try:

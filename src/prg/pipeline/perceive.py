@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from collections.abc import Sequence
 
 import numpy as np
@@ -138,7 +139,10 @@ def load_image(path: str | os.PathLike) -> np.ndarray:
     from PIL import Image, UnidentifiedImageError
 
     try:
-        with Image.open(path) as img:
+        with warnings.catch_warnings():  # Pillow only warns below twice its pixel limit
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            img = Image.open(path)
+        with img:
             img.load()
             mode = img.mode
             if mode in ("I", "I;16", "I;16B", "I;16L", "F"):
@@ -155,6 +159,9 @@ def load_image(path: str | os.PathLike) -> np.ndarray:
         raise UsageError(f"{path}: no such image file") from None
     except UnidentifiedImageError:
         raise UsageError(f"{path}: not an image Pillow can read") from None
+    except (Image.DecompressionBombError, Image.DecompressionBombWarning) as err:
+        size = str(err).split(",")[0]  # "Image size (N pixels) exceeds limit of M pixels"
+        raise UsageError(f"{path}: image too large to read: {size}") from None
     except (OSError, ValueError) as err:
         raise UsageError(f"{path}: cannot read image ({err})") from None
 

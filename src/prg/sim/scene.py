@@ -60,11 +60,23 @@ TABLE_TOP_Z = 0.625  # pybullet_data/table/table.urdf: a 5 cm top centred at z =
 
 
 def pybullet() -> ModuleType:
-    """The ``pybullet`` module, or a one-line error saying how to install it."""
+    """The ``pybullet`` module, or a one-line error saying how to install it.
+
+    Its import prints a build-time banner on the C level stderr; that is kept out, so that a
+    command's stderr holds only what the command says."""
+    if "pybullet" in sys.modules:
+        return sys.modules["pybullet"]
+    sys.stderr.flush()
+    saved, devnull = os.dup(2), os.open(os.devnull, os.O_WRONLY)
     try:
+        os.dup2(devnull, 2)
         import pybullet as p
     except ImportError:  # pragma: no cover - pybullet is a core dependency
         raise PRGError("the simulator needs pybullet: pip install pybullet") from None
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(devnull)
     return p
 
 
