@@ -48,6 +48,8 @@ demo: setup ## Run the whole pipeline (dvc repro): data, models, evaluation, Tab
 	@echo "Robot:    reports/simulate/ink.png, page.png, metrics.json; rerun reports/simulate/sim.rrd"
 	@echo "Studies:  studies/turing/build/, studies/readability/build/ (index.html; capture/index.html)"
 	@echo "Runs:     mlflow ui --backend-store-uri sqlite:///mlruns.db   (then http://127.0.0.1:5000)"
+	@echo "Rerun:    rerun --web-viewer reports/simulate/sim.rrd   (or plain \`rerun FILE\` with a display)"
+	@echo "Results:  make results SNAPSHOT=1   (the README's tables from these reports)"
 
 test: setup ## Run the default test suite (fast; no `slow` tests)
 	$(BIN)/pytest -m "not slow" -n 2 -q
