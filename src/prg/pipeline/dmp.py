@@ -572,14 +572,21 @@ def forcing_targets(
 def _targets(
     y: _FloatArray, tau: float, stiffness: float, damping: float, alpha_x: float
 ) -> tuple[_FloatArray, _FloatArray]:
-    """:func:`forcing_targets` on validated arguments."""
+    """:func:`forcing_targets` on validated arguments.
+
+    Computed on ``y - y0``: the targets depend on the positions only through differences, and
+    finite differences of absolute coordinates would round at the size of the coordinates, which
+    the stencils amplify by ``(n - 1)^2`` (a path far from the origin was reproduced with an error
+    of ~1e4 ulps of its offset; a nearly constant one, 1e-9 cm around 1e4 cm, 70 of its steps).
+    """
     n = y.shape[0]
     dt = tau / (n - 1)
-    yd = _derivative(y, dt, 1)
-    ydd = _derivative(y, dt, 2)
+    rel = y - y[0]
+    yd = _derivative(rel, dt, 1)
+    ydd = _derivative(rel, dt, 2)
     x = phase(np.arange(n) * dt, tau, alpha_x)
-    y0, goal = y[0], y[-1]
-    targets = (tau**2 * ydd + damping * tau * yd) / stiffness - (goal - y) + np.outer(x, goal - y0)
+    goal = rel[-1]
+    targets = (tau**2 * ydd + damping * tau * yd) / stiffness - (goal - rel) + np.outer(x, goal)
     return x, targets
 
 
