@@ -64,10 +64,10 @@ def test_bad_inputs_are_named(tmp_path):
     results = tmp_path / "results"
     results.mkdir()
     (results / "bench_dmp.json").write_text("{not json")
-    with pytest.raises(summarize.SummaryError, match="bench_dmp.json: not readable JSON"):
+    with pytest.raises(summarize.SummaryError, match=r"bench_dmp\.json: not readable JSON"):
         summarize.benchmark_rows(results)
     (results / "bench_dmp.json").write_text("{}")
-    with pytest.raises(summarize.SummaryError, match="bench_dmp.json: unexpected content"):
+    with pytest.raises(summarize.SummaryError, match=r"bench_dmp\.json: unexpected content"):
         summarize.benchmark_rows(results)
     with pytest.raises(summarize.SummaryError, match="no <!-- generated:demo -->"):
         summarize.fill_block("# README without blocks\n", "demo", "x")
