@@ -3,7 +3,7 @@
 The entry point (``studies/cli.py``) calls :func:`register` on its sub-parsers and then
 ``args.func(args)``; every handler returns an exit code and raises
 :class:`prg.errors.UsageError` for bad input (the entry point prints it as one line, exit 2).
-``python -m studies.analysis.commands ...`` runs the same sub-commands without the entry point.
+``python -m studies.analysis.commands ...`` is ``prg-study ...`` (the entry point's ``main``).
 
 Usage::
 
@@ -26,8 +26,8 @@ import math
 import sys
 from pathlib import Path
 
-from prg.cli import check_output, os_error_message
-from prg.errors import PRGError, UsageError
+from prg.cli import check_output
+from prg.errors import UsageError
 
 KINDS = ("turing", "readability")
 
@@ -494,30 +494,7 @@ def run_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Stand-alone runner (``python -m studies.analysis.commands``) with one-line errors."""
+if __name__ == "__main__":  # the same parser and error handling as the entry point
+    from studies.cli import main
 
-    class _Parser(argparse.ArgumentParser):
-        def error(self, message: str):  # one line, exit 2
-            print(f"{self.prog}: error: {' '.join(message.split())}", file=sys.stderr)
-            raise SystemExit(2)
-
-    parser = _Parser(prog="prg-study")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    register(sub)
-    args = parser.parse_args(argv)
-    try:
-        return args.func(args)
-    except PRGError as err:
-        print(f"prg-study: error: {' '.join(str(err).split())}", file=sys.stderr)
-        return err.exit_code
-    except OSError as err:
-        message = os_error_message(err)
-        if message is None:
-            raise
-        print(f"prg-study: error: {message}", file=sys.stderr)
-        return 1
-
-
-if __name__ == "__main__":
     sys.exit(main())
