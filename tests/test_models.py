@@ -544,24 +544,89 @@ def test_prg_module_round_trips_through_a_lightning_checkpoint(family, tmp_path)
         torch.testing.assert_close(got[k], want[k], msg=k)
 
 
-def test_prg_module_checkpoint_keeps_the_beta_warm_up_state(tmp_path):
+def test_prg_module_checkpoint_keeps_the_top_warm_up_state(tmp_path):
     torch.manual_seed(0)
-    module = PRGModule(FAMILIES["muse"][0], ADAM, beta_warmup_epochs=2)
+    module = PRGModule(FAMILIES["muse"][0], ADAM, top_warmup_epochs=2)
     path = _fit_two_batches(module, ALL, tmp_path)
     loaded = PRGModule.load_from_checkpoint(path)
-    assert module.model.beta_scale == pytest.approx(0.5)
-    assert loaded.model.beta_scale == pytest.approx(module.model.beta_scale)
+    assert 0 < module.model.top_scale < 1
+    assert loaded.model.top_scale == pytest.approx(module.model.top_scale)
 
 
-def test_prg_module_warms_up_the_muse_top_kl_weight_linearly():
-    module = PRGModule(FAMILIES["muse"][0], ADAM, beta_warmup_epochs=4)
-    module.on_train_epoch_start()  # epoch 0 (no trainer attached)
-    assert module.model.beta_scale == pytest.approx(0.25)
+def test_prg_module_warms_up_the_muse_top_regularisers_linearly_per_step():
+    module = PRGModule(FAMILIES["muse"][0], ADAM, top_warmup_epochs=1.5)
+    batches = [make_batch(8, seed=s, modalities=ALL) for s in range(4)]
+    scales = []
+
+    class Record(L.Callback):
+        def on_train_batch_end(self, trainer, pl_module, outputs, batch, batch_idx):
+            scales.append(pl_module.model.top_scale)
+
+    trainer = _trainer(max_epochs=2, limit_val_batches=0, callbacks=[Record()])
+    trainer.fit(module, DataLoader(batches, batch_size=None))
+    steps = 1.5 * len(batches)  # the warm-up counts optimizer steps: 1.5 epochs of 4 batches
+    assert scales == pytest.approx([min(1.0, (i + 1) / steps) for i in range(8)])
 
 
-def test_prg_module_refuses_a_negative_warm_up():
-    with pytest.raises(UsageError, match="beta_warmup_epochs must be >= 0"):
-        PRGModule(FAMILIES["cvae"][0], ADAM, beta_warmup_epochs=-1)
+def test_top_scale_weights_the_top_kl_and_the_subset_skl():
+    torch.manual_seed(0)
+    model = PRGModule(FAMILIES["muse"][0], ADAM).model
+    batch = make_batch(8, seed=1, modalities=ALL)
+
+    def loss_at(scale):
+        model.top_scale = scale
+        torch.manual_seed(2)
+        return model.elbo(batch)
+
+    full, none = loss_at(1.0), loss_at(0.0)
+    regularisers = model.beta * full["top_kl"] + model.delta * full["subset_skl"]
+    # the losses are large sums: compare the difference to within their float32 rounding
+    tolerance = 1e-6 * float(full["loss"].abs())
+    torch.testing.assert_close(full["loss"] - none["loss"], regularisers, atol=tolerance, rtol=0)
+
+
+@pytest.mark.parametrize("bad", [-1, "two", True])
+def test_prg_module_refuses_a_bad_warm_up(bad):
+    with pytest.raises(UsageError, match="top_warmup_epochs must be a number >= 0"):
+        PRGModule(FAMILIES["cvae"][0], ADAM, top_warmup_epochs=bad)
+
+
+def test_one_cycle_schedule_spans_the_run_and_steps_per_batch():
+    schedule = {
+        "_target_": "torch.optim.lr_scheduler.OneCycleLR",
+        "_partial_": True,
+        "max_lr": 1e-3,
+        "pct_start": 0.25,
+    }
+    module = PRGModule(FAMILIES["cvae"][0], ADAM, scheduler=schedule)
+    batches = [make_batch(8, seed=s, modalities=("traj", "label")) for s in range(4)]
+    rates = []
+
+    class Record(L.Callback):
+        def on_train_batch_start(self, trainer, pl_module, batch, batch_idx):
+            rates.append(trainer.optimizers[0].param_groups[0]["lr"])
+
+    trainer = _trainer(max_epochs=2, limit_val_batches=0, callbacks=[Record()])
+    trainer.fit(module, DataLoader(batches, batch_size=None))
+    assert len(rates) == 8
+    peak = rates.index(max(rates))
+    assert max(rates) == pytest.approx(1e-3)
+    assert rates[0] < max(rates) / 10 and 0 < peak < 4  # warms up in the first quarter ...
+    assert all(a >= b for a, b in zip(rates[peak:], rates[peak + 1 :]))  # ... then only falls
+    assert rates[-1] < rates[0]  # to below its starting value by the run's last step
+
+
+def test_zero_init_trajectory_starts_every_trajectory_decoder_flat():
+    for family in FAMILIES:
+        module = PRGModule(FAMILIES[family][0], ADAM, zero_init_trajectory=True)
+        decoders = [m for m in module.model.modules() if isinstance(m, TrajectoryDecoder)]
+        assert decoders, family
+        z = torch.randn(5, decoders[0].net[0].in_features)
+        for decoder in decoders:
+            assert torch.count_nonzero(decoder(z)) == 0, family
+        default = PRGModule(FAMILIES[family][0], ADAM)
+        other = next(m for m in default.model.modules() if isinstance(m, TrajectoryDecoder))
+        assert torch.count_nonzero(other(z)) > 0, family
 
 
 @pytest.mark.parametrize("family", list(FAMILIES))

@@ -174,3 +174,59 @@ def test_paper_profile_registers_the_best_checkpoint(tmp_path, small_dataset):
     assert len(versions) == 1 and versions[0].run_id == result.run_id
     assert versions[0].source.endswith("checkpoints/best.ckpt")
     assert client.get_run(result.run_id).data.tags["prg.experiment"] == "paper"
+
+
+PAPER_BATCH = {"cvae": 128, "avae_ts": 128, "avae_ti": 128, "muse": 64}
+
+
+@pytest.mark.parametrize("family", list(PAPER_BATCH))
+def test_paper_profile_keeps_the_papers_hyper_parameters(family, tmp_path):
+    cfg = compose_config("train", [f"model={family}", "experiment=paper"])
+    module = cfg.model.module
+    assert cfg.model.batch_size == PAPER_BATCH[family]
+    assert module.optimizer._target_ == "torch.optim.Adam" and module.optimizer.lr == 1e-4
+    assert module.scheduler is None and not module.zero_init_trajectory
+    assert module.get("top_warmup_epochs", 0) == 0
+    assert cfg.trainer.precision == "32-true" and cfg.trainer.max_epochs == 50
+
+
+@pytest.mark.parametrize("profile", ["quick", "converged"])
+@pytest.mark.parametrize("family", list(PAPER_BATCH))
+def test_fast_profiles_share_one_recipe(profile, family):
+    cfg = compose_config("train", [f"model={family}", f"experiment={profile}"])
+    module = cfg.model.module
+    assert cfg.profile == profile
+    assert module.scheduler._target_ == "torch.optim.lr_scheduler.OneCycleLR"
+    assert module.scheduler.max_lr == module.optimizer.lr
+    assert module.zero_init_trajectory and cfg.trainer.precision == "bf16-mixed"
+    assert isinstance(cfg.trainer.max_epochs, int) and cfg.trainer.max_epochs >= 1
+    assert cfg.trainer.accelerator == "auto"
+
+
+def test_quick_profile_trains_with_the_recipe_on_the_cpu(tmp_path, small_dataset):
+    result = train(_cfg(tmp_path, small_dataset, "model=muse", "experiment=quick", *FAST))
+    assert result.trainer.state.finished and result.trainer.current_epoch == 2
+    assert result.trainer.precision == "bf16-mixed"
+    scheduler = result.trainer.lr_scheduler_configs[0].scheduler
+    assert type(scheduler).__name__ == "OneCycleLR" and scheduler.total_steps == 6
+    assert result.module.model.top_scale == 1.0  # a 1-epoch warm-up is over after 2 epochs
+    run = _client(tmp_path).get_run(result.run_id)
+    assert run.data.tags["prg.experiment"] == "quick" and run.info.status == "FINISHED"
+
+
+def test_converged_profile_stops_when_validation_stops_improving(tmp_path, small_dataset):
+    # an improvement threshold no run can meet: early stopping ends it after `patience` epochs
+    result = train(
+        _cfg(
+            tmp_path,
+            small_dataset,
+            "model=cvae",
+            "experiment=converged",
+            *FAST,
+            "trainer.max_epochs=6",
+            "callbacks.early_stopping.patience=1",
+            "callbacks.early_stopping.min_delta=1e9",
+        )
+    )
+    assert result.trainer.should_stop and result.trainer.current_epoch == 2  # 6 allowed
+    assert _client(tmp_path).get_run(result.run_id).info.status == "FINISHED"

@@ -66,6 +66,20 @@ class TrajectoryDecoder(nn.Module):
     def forward(self, z: torch.Tensor) -> torch.Tensor:
         return self.net(z)
 
+    def zero_output_layer(self) -> None:
+        """Start the last layer (512 -> 200) at zero, weights and bias.
+
+        With PyTorch's default initialisation every decoded letter carries a fixed random
+        pattern, ``W_0 h``, that is white from one point to the next; gradient descent removes
+        it only along the directions the hidden features span, so early models write jittery
+        letters. From zero, the layer holds only accumulated gradients of the reconstruction
+        residuals, which are as smooth as the letters are. The network is unchanged; only its
+        starting point is (the hidden layers still start random, so it still learns).
+        """
+        last = self.net[-1]
+        nn.init.zeros_(last.weight)
+        nn.init.zeros_(last.bias)
+
 
 class LabelEncoder(nn.Module):
     """y (B,) long -> Embedding(62, 256) -> FC 256 x2 -> (mu, logvar)."""

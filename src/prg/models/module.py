@@ -17,6 +17,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from prg.errors import UsageError
 from prg.models.base import MultimodalVAE
+from prg.models.components import TrajectoryDecoder
 
 
 def _plain(cfg: Any) -> dict[str, Any]:
@@ -32,23 +33,51 @@ class PRGModule(L.LightningModule):
         Config of the family (``_target_`` and its arguments), e.g. ``conf/model/muse.yaml``.
     optimizer : dict
         Partial optimizer config (``_target_: torch.optim.Adam``, ``_partial_: true``, ``lr``).
-    beta_warmup_epochs : int
-        Linear warm-up of MUSE's top-level KL weight over this many epochs (0: none).
+    scheduler : dict, optional
+        Partial learning-rate scheduler config stepped once per optimizer step, called as
+        ``scheduler(optimizer, total_steps=<the run's optimizer steps>)`` (e.g.
+        ``torch.optim.lr_scheduler.OneCycleLR``); ``None``: a constant learning rate.
+    top_warmup_epochs : float
+        Linear warm-up of MUSE's top-level regularisers (the top KL, beta, and the subset
+        symmetric KL, delta; see :mod:`prg.models.muse`) over this many epochs, updated every
+        step (fractions allowed; 0: none).
+    zero_init_trajectory : bool
+        Start every trajectory decoder's output layer at zero
+        (:meth:`~prg.models.components.TrajectoryDecoder.zero_output_layer`): smooth letters
+        from the first steps instead of a white-noise pattern that training removes slowly.
     """
 
     def __init__(
-        self, model: dict[str, Any], optimizer: dict[str, Any], beta_warmup_epochs: int = 0
+        self,
+        model: dict[str, Any],
+        optimizer: dict[str, Any],
+        scheduler: dict[str, Any] | None = None,
+        top_warmup_epochs: float = 0,
+        zero_init_trajectory: bool = False,
     ):
         super().__init__()
         model, optimizer = _plain(model), _plain(optimizer)  # checkpoints hold plain containers
+        scheduler = _plain(scheduler) if scheduler else None
         self.save_hyperparameters(
-            {"model": model, "optimizer": optimizer, "beta_warmup_epochs": beta_warmup_epochs}
+            {
+                "model": model,
+                "optimizer": optimizer,
+                "scheduler": scheduler,
+                "top_warmup_epochs": top_warmup_epochs,
+                "zero_init_trajectory": zero_init_trajectory,
+            }
         )
         self.model: MultimodalVAE = instantiate(model, _convert_="all")
+        if zero_init_trajectory:
+            for decoder in self.model.modules():
+                if isinstance(decoder, TrajectoryDecoder):
+                    decoder.zero_output_layer()
         self._sums: dict[str, dict[str, torch.Tensor]] = {}
         self._counts: dict[str, int] = {}
-        if beta_warmup_epochs < 0:
-            raise UsageError(f"beta_warmup_epochs must be >= 0, got {beta_warmup_epochs}")
+        if isinstance(top_warmup_epochs, bool) or not (
+            isinstance(top_warmup_epochs, int | float) and top_warmup_epochs >= 0
+        ):
+            raise UsageError(f"top_warmup_epochs must be a number >= 0, got {top_warmup_epochs!r}")
 
     @property
     def family(self) -> str:
@@ -57,10 +86,16 @@ class PRGModule(L.LightningModule):
     def forward(self, batch: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
         return self.model.elbo(batch)
 
-    def on_train_epoch_start(self) -> None:
-        warmup = self.hparams.beta_warmup_epochs
-        if hasattr(self.model, "beta_scale"):
-            self.model.beta_scale = min(1.0, (self.current_epoch + 1) / warmup) if warmup else 1.0
+    def on_train_batch_start(self, batch: Any, batch_idx: int) -> None:
+        """Set MUSE's ``top_scale`` to the fraction of the warm-up done at this step.
+
+        The warm-up counts optimizer steps, ``top_warmup_epochs`` times the batches of an
+        epoch, so short runs (the demo's 300-batch epochs) warm up as smoothly as long ones.
+        """
+        warmup = self.hparams.top_warmup_epochs
+        if hasattr(self.model, "top_scale"):
+            steps = warmup * max(1, int(self.trainer.num_training_batches))
+            self.model.top_scale = min(1.0, (self.global_step + 1) / steps) if warmup else 1.0
 
     def _step(self, batch: dict[str, torch.Tensor], split: str) -> torch.Tensor:
         # Terms are summed here and logged once per epoch (_log_epoch): Lightning's per-call
@@ -90,12 +125,12 @@ class PRGModule(L.LightningModule):
         self._log_epoch("test")
 
     def on_save_checkpoint(self, checkpoint: dict[str, Any]) -> None:
-        if hasattr(self.model, "beta_scale"):  # a plain attribute, not in the state dict
-            checkpoint["beta_scale"] = float(self.model.beta_scale)
+        if hasattr(self.model, "top_scale"):  # a plain attribute, not in the state dict
+            checkpoint["top_scale"] = float(self.model.top_scale)
 
     def on_load_checkpoint(self, checkpoint: dict[str, Any]) -> None:
-        if hasattr(self.model, "beta_scale") and "beta_scale" in checkpoint:
-            self.model.beta_scale = checkpoint["beta_scale"]
+        if hasattr(self.model, "top_scale") and "top_scale" in checkpoint:
+            self.model.top_scale = checkpoint["top_scale"]
 
     def training_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> torch.Tensor:
         return self._step(batch, "train")
@@ -106,5 +141,13 @@ class PRGModule(L.LightningModule):
     def test_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> None:
         self._step(batch, "test")
 
-    def configure_optimizers(self) -> torch.optim.Optimizer:
-        return instantiate(self.hparams.optimizer)(params=self.parameters())
+    def configure_optimizers(self) -> torch.optim.Optimizer | dict[str, Any]:
+        optimizer = instantiate(self.hparams.optimizer)(params=self.parameters())
+        if not self.hparams.scheduler:
+            return optimizer
+        total = int(self.trainer.estimated_stepping_batches)
+        scheduler = instantiate(self.hparams.scheduler)(optimizer, total_steps=total)
+        return {
+            "optimizer": optimizer,
+            "lr_scheduler": {"scheduler": scheduler, "interval": "step", "frequency": 1},
+        }
