@@ -12,7 +12,7 @@ STAMP := $(VENV)/.setup-$(shell cat pyproject.toml | sha1sum | cut -c1-12)
 export PATH := $(CURDIR)/$(BIN):$(PATH)
 
 .DEFAULT_GOAL := help
-.PHONY: help system setup demo test test-all lint format bench results clean
+.PHONY: help system setup demo paper test test-all lint format bench results clean
 
 help: ## Show this help
 	@awk 'BEGIN {FS = ":.*## "} /^[a-zA-Z_-]+:.*## / {printf "  \033[36m%-10s\033[0m %s\n", $$1, $$2}' $(MAKEFILE_LIST)
@@ -50,6 +50,10 @@ demo: setup ## Run the whole pipeline (dvc repro): data, models, evaluation, Tab
 	@echo "Runs:     mlflow ui --backend-store-uri sqlite:///mlruns.db   (then http://127.0.0.1:5000)"
 	@echo "Rerun:    rerun --web-viewer reports/simulate/sim.rrd   (or plain \`rerun FILE\` with a display)"
 	@echo "Results:  make results SNAPSHOT=1   (the README's tables from these reports)"
+
+# Options after PAPER_ARGS=, e.g. PAPER_ARGS="--families muse --device auto" (python -m prg.paper_scale -h)
+paper: setup ## Paper scale on one GPU: the 4 families (experiment=paper) at once, then K=1000/5000 -> paper/
+	$(BIN)/python -m prg.paper_scale $(PAPER_ARGS)
 
 test: setup ## Run the default test suite (fast; no `slow` tests)
 	$(BIN)/pytest -m "not slow" -n 2 -q
