@@ -336,42 +336,130 @@ def snapshot(root: Path = ROOT, demo: Path = DEMO) -> None:
     _write_file(demo / "provenance.json", json.dumps(provenance, indent=2, sort_keys=True) + "\n")
 
 
+TABLE1_CELLS = ["T", "S", "I", "T_given_S", "T_given_I", "S_given_T", "I_given_T"]
+TRAJ_CELLS = [c for c in TABLE1_CELLS if c.startswith("T")]  # trajectory targets
+MODEL_STD = "_model_std"  # prg.evaluation.likelihood.MODEL_STD_SUFFIX
+COHERENCE_CELLS = ["T_given_S", "T_given_I", "I_given_T", "S_given_T", "T_given_TS"]
+ROUGHNESS_CELLS = ["T_given_S", "T_given_I"]
+TEST_ROUGHNESS = "test_split/roughness"
+
+
+def _cell_title(cell: str) -> str:
+    return "log p(x_" + cell.replace("_given_", " \\| x_") + ")"
+
+
+def _number(evaluate: dict, key: str, fmt: str) -> str:
+    """A metric formatted, or '-' when the snapshot does not hold it."""
+    value = evaluate.get(key)
+    return "-" if value is None else format(value, fmt)
+
+
+def _legacy_table1(evaluate: dict) -> bool:
+    """A snapshot written before Table I had two trajectory conventions: its ``logp_T*`` values
+    are under the models' own std (0.1), not the unit-variance main table's."""
+    return any("/logp_" in k for k in evaluate) and not any(k.endswith(MODEL_STD) for k in evaluate)
+
+
+def table1_markdown(evaluate: dict, models: dict[str, dict]) -> str:
+    """Table I in the paper's convention (unit-variance trajectory Gaussian, the paper's values
+    in parentheses) and the trajectory cells under each model's own std."""
+    from prg.evaluation.reports import PAPER_TABLE1
+
+    legacy = _legacy_table1(evaluate)
+
+    def main_cell(family: str, cell: str) -> str:
+        if legacy and cell in TRAJ_CELLS:
+            return "-"
+        ours = _number(evaluate, f"{family}/logp_{cell}", ".1f")
+        paper = PAPER_TABLE1.get(family, {}).get(f"logp_{cell}")
+        return ours if ours == "-" or paper is None else f"{ours} ({paper:.2f})"
+
+    def own_cell(family: str, cell: str) -> str:
+        key = f"{family}/logp_{cell}" + ("" if legacy else MODEL_STD)
+        return _number(evaluate, key, ".1f")
+
+    main = _table(
+        ["model", *map(_cell_title, TABLE1_CELLS), "val loss"],
+        [
+            [
+                FAMILIES[family],
+                *(main_cell(family, c) for c in TABLE1_CELLS),
+                _number(models.get(family, {}), "val_loss", ".1f"),
+            ]
+            for family in FAMILIES
+        ],
+    )
+    own = _table(
+        ["model", *map(_cell_title, TRAJ_CELLS)],
+        [[FAMILIES[family], *(own_cell(family, c) for c in TRAJ_CELLS)] for family in FAMILIES],
+    )
+    lines = [
+        "**Table I** (importance-weighted log-likelihoods, nats; higher is better) in the "
+        "paper's convention: trajectory cells under a unit-variance Gaussian with its "
+        "normalising constant, the paper's values in parentheses (its label and image terms "
+        "follow another convention, see *Evaluation*); and the validation loss of each model:",
+        "",
+        main,
+        "",
+        "The trajectory cells under each model's own std (0.1, the one it is trained with), "
+        "from the same importance samples:",
+        "",
+        own,
+    ]
+    if legacy:
+        lines[1:1] = [
+            "",
+            "(This snapshot predates the unit-variance table, so its trajectory cells appear "
+            "only in the second table; `make demo` then `python benchmarks/summarize.py "
+            "--snapshot` refresh it.)",
+        ]
+    return "\n".join(lines)
+
+
+def coherence_markdown(evaluate: dict) -> str:
+    """Exact and shape-twin-folded coherence, and the roughness ratios of decoded letters."""
+
+    def cell(family: str, c: str) -> str:
+        exact = _number(evaluate, f"{family}/coherence_{c}", ".0%")
+        folded = _number(evaluate, f"{family}/coherence_folded_{c}", ".0%")
+        return "-" if exact == folded == "-" else f"{exact} / {folded}"
+
+    coherence = _table(
+        ["model", *(c.replace("_given_", " from ") for c in COHERENCE_CELLS)],
+        [[FAMILIES[f], *(cell(f, c) for c in COHERENCE_CELLS)] for f in FAMILIES],
+    )
+    roughness = _table(
+        ["model", *(c.replace("_given_", " from ") for c in ROUGHNESS_CELLS)],
+        [
+            [
+                FAMILIES[f],
+                *(_number(evaluate, f"{f}/roughness_ratio_{c}", ".2f") for c in ROUGHNESS_CELLS),
+            ]
+            for f in FAMILIES
+        ],
+    )
+    return "\n".join(
+        [
+            "**Cross-modal coherence** (the generated modality classified as the given label; "
+            "exact / with shape twins such as o/O/0 counted right):",
+            "",
+            coherence,
+            "",
+            "**Smoothness**: roughness ratio of the letters decoded from labels or images "
+            "(posterior mean): their median roughness over the test letters' median roughness "
+            f"({_number(evaluate, TEST_ROUGHNESS, '.3f')}); 1 is as smooth as the data, the "
+            "target is <= 2:",
+            "",
+            roughness,
+        ]
+    )
+
+
 def demo_markdown(demo: Path = DEMO) -> str:
     """Tables of the demo pipeline's results (quick profile, synthetic data)."""
     d = {name: read_json(demo / name) for name in DEMO_SOURCES}
     evaluate = d["evaluate.json"]
-    cells = ["T", "S", "I", "T_given_S", "T_given_I", "S_given_T", "I_given_T"]
-    titles = ["log p(x_" + c.replace("_given_", " \\| x_") + ")" for c in cells]
-    table1 = _table(
-        ["model", *titles, "val loss"],
-        [
-            [
-                FAMILIES[family],
-                *(
-                    f"{evaluate[key]:.1f}" if (key := f"{family}/logp_{c}") in evaluate else "-"
-                    for c in cells
-                ),
-                f"{d[f'models_{family}.json']['val_loss']:.1f}",
-            ]
-            for family in FAMILIES
-        ],
-    )
-    coherence_cells = ["T_given_S", "T_given_I", "I_given_T", "S_given_T", "T_given_TS"]
-    coherence = _table(
-        ["model", *(c.replace("_given_", " from ") for c in coherence_cells)],
-        [
-            [
-                FAMILIES[family],
-                *(
-                    f"{evaluate[key]:.0%}"
-                    if (key := f"{family}/coherence_{c}") in evaluate
-                    else "-"
-                    for c in coherence_cells
-                ),
-            ]
-            for family in FAMILIES
-        ],
-    )
+    models = {family: d[f"models_{family}.json"] for family in FAMILIES}
     dictaphone = d["dictaphone.json"]
     table2 = _table(
         ["word", "channel", "perceived", "written", "DMP error", "seconds"],
@@ -396,14 +484,9 @@ def demo_markdown(demo: Path = DEMO) -> str:
         f"{prepare['test_samples']:,} train / val / test samples; coherence classifiers "
         f"{_accuracy_text(classifiers)}.",
         "",
-        "**Table I** (importance-weighted log-likelihoods, nats; higher is better) and the "
-        "validation loss of each quick model:",
+        table1_markdown(evaluate, models),
         "",
-        table1,
-        "",
-        "**Cross-modal coherence** (the generated modality classified as the given label):",
-        "",
-        coherence,
+        coherence_markdown(evaluate),
         "",
         f"**Table II** (`prg-dictaphone`, MUSE): the words from speech (whisper, lexicon, "
         f"rescoring) and from the letter images alone (images read right: "
@@ -441,11 +524,15 @@ def _write_file(path: Path, text: str) -> None:
     os.replace(tmp, path)
 
 
-def results_markdown(results: Path = RESULTS) -> str:
+def results_markdown(results: Path = RESULTS, demo: Path = DEMO) -> str:
     return (
         "# Benchmark results\n\n"
         "Generated by `python benchmarks/summarize.py` (run by `make bench`); do not edit.\n\n"
         + benchmarks_markdown(results)
+        + "\n\n## The demo pipeline\n\n"
+        + "`make demo` (quick profile, synthetic data), from the snapshot in "
+        + "`benchmarks/results/demo/`.\n\n"
+        + demo_markdown(demo)
         + "\n"
     )
 

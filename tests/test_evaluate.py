@@ -12,11 +12,14 @@ import torch
 from mlflow import MlflowClient
 
 from prg.cli import compose_config
-from prg.evaluate import evaluate
+from prg.evaluate import _subset, _test_data, evaluate
+from prg.evaluation.classifiers import FOLD, load_classifier, predict
 from prg.evaluation.coherence import coherence_cells, per_class_rate
-from prg.evaluation.likelihood import TABLE1_CELLS, estimate_cell
+from prg.evaluation.likelihood import MODEL_STD_SUFFIX, TABLE1_CELLS, estimate_cell
 from prg.evaluation.reports import PAPER_TABLE1
+from prg.evaluation.smoothness import median_roughness
 from prg.models.checkpoint import load_model
+from prg.models.likelihoods import Likelihoods
 from prg.tracking import sqlite_uri
 from prg.train import train
 from tests.conftest import run_cli
@@ -61,16 +64,20 @@ def _cfg(root: Path, data_dir: Path, *overrides: str):
 
 
 def test_reports_tables_figures_and_mlflow(trained_root, small_dataset):
-    result = evaluate(_cfg(trained_root, small_dataset))
+    cfg = _cfg(trained_root, small_dataset)
+    result = evaluate(cfg)
     reports = trained_root / "reports"
     models = {f: load_model(trained_root / f"models/{f}/model.ckpt")[0] for f in FAMILIES}
 
-    # Table I: each family fills exactly the cells it supports, which are the paper's cells
+    # Table I: each family fills exactly the cells it supports, which are the paper's cells,
+    # and its trajectory-target cells once more under its own std
     cells = {(r["model"], r["cell"]) for r in result.table1}
     for family, model in models.items():
-        mine = {c for m, c in cells if m == family}
+        mine = {c for m, c in cells if m == family and not c.endswith(MODEL_STD_SUFFIX)}
         assert mine == {c for c, cell in TABLE1_CELLS.items() if cell in model.likelihood_cells}
         assert mine == set(PAPER_TABLE1[family])
+        own = {c for m, c in cells if m == family and c.endswith(MODEL_STD_SUFFIX)}
+        assert own == {c + MODEL_STD_SUFFIX for c in mine if TABLE1_CELLS[c][0] == "traj"}
     assert all(math.isfinite(r["value"]) and r["n_test"] == 12 for r in result.table1)
     assert {r["k"] for r in result.table1 if "_given_" in r["cell"]} == {6}
     with open(reports / "table1.csv") as f:
@@ -79,23 +86,82 @@ def test_reports_tables_figures_and_mlflow(trained_root, small_dataset):
     assert float(rows[0]["value"]) == pytest.approx(result.table1[0]["value"], rel=1e-5)
     table = (reports / "table1.md").read_text()
     assert "(-192.75)" in table and "PRG_MUSE(T,S,I)" in table and "Density convention" in table
+    assert "## Trajectory cells under each model's own std" in table
+    assert {r["traj_std"] for r in result.table1 if r["cell"] == "logp_T"} == {1.0}
+    assert {r["traj_std"] for r in result.table1 if r["cell"] == "logp_T_model_std"} == {0.1}
+    assert {r["traj_std"] for r in result.table1 if r["cell"] == "logp_S"} == {None}
+
+    # the one-pass pair equals two separate estimates with the same seed: the default table
+    # under a unit-variance Gaussian, the second under the model's own std
+    data = _subset(_test_data(cfg), 12, cfg.seed)
+    by_key = {(r["model"], r["cell"]): r["value"] for r in result.table1}
+    for family, cell in (("muse", "logp_T_given_S"), ("avae_ti", "logp_T")):
+        target, given = TABLE1_CELLS[cell]
+        k = 6 if given else 4
+        model = models[family]
+        for key, lik in ((cell, Likelihoods(1.0)), (cell + MODEL_STD_SUFFIX, model.likelihoods)):
+            alone = estimate_cell(model, target, given, data, k, 64, 4096, cfg.seed, False, lik)
+            assert by_key[(family, key)] == pytest.approx(alone.mean().item(), abs=1e-3)
 
     # coherence: every subset x target x kind; MUSE has 7 subsets and 3 targets
     muse = [r for r in result.coherence if r["model"] == "muse"]
     assert len(muse) == 7 * 3 * 2
-    assert all(0.0 <= r["coherence"] <= 1.0 for r in result.coherence)
+    assert all(0.0 <= r["coherence"] <= r["coherence_folded"] <= 1.0 for r in result.coherence)
+    with open(reports / "coherence.csv") as f:
+        coherence_csv = list(csv.DictReader(f))
+    assert [float(r["coherence_folded"]) for r in coherence_csv] == pytest.approx(
+        [r["coherence_folded"] for r in result.coherence], abs=1e-5
+    )
     cvae = {(r["target"], r["given"]) for r in result.coherence if r["model"] == "cvae"}
     assert cvae == {("traj", "S"), ("traj", "T,S")}
     robustness = (reports / "robustness.md").read_text()
     assert "{S,I}" in robustness and "{T,S,I}*" in robustness
     assert "# Missing-modality robustness" in robustness
-    assert "test accuracy" in (reports / "coherence.md").read_text()
+    coherence_md = (reports / "coherence.md").read_text()
+    assert "test accuracy" in coherence_md and "mean, folded" in coherence_md
+    assert "## Smoothness of decoded letters" in coherence_md
     figures = {p.name for p in (reports / "figures").iterdir()}
     assert {"muse_T_given_S.png", "muse_I_given_T.png", "muse_coherence_per_class.png"} <= figures
 
     # metrics.json and MLflow: test metrics in each model's training run, reports as artifacts
     metrics = json.loads((reports / "metrics.json").read_text())
     assert metrics == result.metrics
+
+    # folded coherence beside every exact value, and recomputed for one cell: the letters MUSE
+    # decodes from labels, classified, a prediction in the label's shape-twin group counted right
+    exact = {k for k in metrics if "/coherence_" in k and "/coherence_folded_" not in k}
+    folded = {k for k in metrics if "/coherence_folded_" in k}
+    assert folded == {k.replace("/coherence_", "/coherence_folded_", 1) for k in exact}
+    test = _test_data(cfg)
+    labels = test["label"].numpy()
+    muse_s = models["muse"].generate({"label": test["label"]}, "traj")[0]
+    classifier, _ = load_classifier(trained_root / "models/classifiers/traj.pt")
+    predicted = predict(classifier, muse_s).numpy()
+    assert metrics["muse/coherence_T_given_S"] == pytest.approx(
+        np.mean(predicted == labels), abs=1e-3
+    )
+    assert metrics["muse/coherence_folded_T_given_S"] == pytest.approx(
+        np.mean(FOLD[predicted] == FOLD[labels]), abs=1e-3
+    )
+
+    # roughness of decoded letters over the test letters' (posterior mean, whole test split)
+    reference = median_roughness(test["traj"].numpy())
+    assert metrics["test_split/roughness"] == pytest.approx(reference, abs=1e-4)
+    assert metrics["muse/roughness_ratio_T_given_S"] == pytest.approx(
+        median_roughness(muse_s.numpy()) / reference, rel=1e-3
+    )
+    ti_i = models["avae_ti"].generate({"image": test["image"]}, "traj")[0]
+    assert metrics["avae_ti/roughness_ratio_T_given_I"] == pytest.approx(
+        median_roughness(ti_i.numpy()) / reference, rel=1e-3
+    )
+    ratio_keys = {k for k in metrics if "/roughness_ratio_" in k}
+    assert ratio_keys == {
+        "cvae/roughness_ratio_T_given_S",
+        "avae_ts/roughness_ratio_T_given_S",
+        "avae_ti/roughness_ratio_T_given_I",
+        "muse/roughness_ratio_T_given_S",
+        "muse/roughness_ratio_T_given_I",
+    }
     client = MlflowClient(sqlite_uri(trained_root / "mlruns.db"))
     run_id = json.loads((trained_root / "models/muse/metrics.json").read_text())["mlflow_run_id"]
     logged = client.get_run(run_id).data.metrics
@@ -165,6 +231,7 @@ BAD = [
     (["likelihood.cells=[logp_X]"], "likelihood.cells"),
     (["parts=[plots]"], "parts"),
     (["coherence.temperatures.mean=-1"], "temperatures.mean"),
+    (["likelihood.traj_std=0"], "likelihood.traj_std must be null (each model's own) or > 0"),
 ]
 
 

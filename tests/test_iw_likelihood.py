@@ -12,7 +12,7 @@ import pytest
 import torch
 
 from prg.errors import UsageError
-from prg.evaluation.likelihood import iw_log_likelihood
+from prg.evaluation.likelihood import iw_log_likelihood, iw_log_likelihoods
 from prg.models.base import Gaussian, ImportancePath
 from prg.models.likelihoods import Likelihoods
 
@@ -27,15 +27,15 @@ def _model(seed=0):
     return w, b, x
 
 
-def _exact(w, b, x):
-    cov = w @ w.T + STD**2 * torch.eye(D)
+def _exact(w, b, x, std=STD):
+    cov = w @ w.T + std**2 * torch.eye(D)
     return torch.distributions.MultivariateNormal(b, covariance_matrix=cov).log_prob(x)
 
 
-def _posterior(w, b, x):
-    precision = torch.eye(LATENT) + w.T @ w / STD**2
+def _posterior(w, b, x, std=STD):
+    precision = torch.eye(LATENT) + w.T @ w / std**2
     cov = torch.linalg.inv(precision)
-    mean = (x - b) @ w @ cov.T / STD**2
+    mean = (x - b) @ w @ cov.T / std**2
     return mean, torch.log(torch.diagonal(cov)).expand_as(mean), cov
 
 
@@ -110,3 +110,51 @@ def test_single_sample_is_the_elbo_estimate():
     est = iw_log_likelihood(_path(mean, logvar, w, b), x, Likelihoods(STD), k=1, generator=g)
     assert torch.isfinite(est).all()
     assert math.isfinite(float(est.mean()))
+
+
+def test_several_likelihoods_in_one_pass_equal_separate_passes():
+    """One pass under stds 0.1, 1.0 and 0.3 (shared latent samples and decoder outputs) gives,
+    row by row, what a separate pass with the same seed gives."""
+    w, b, x = _model(4)
+    mean, logvar, _ = _posterior(w, b, x)
+    path = _path(mean + 0.3 * torch.exp(0.5 * logvar), logvar + 0.5, w, b)
+    stds = (STD, 1.0, 0.3)
+    together = iw_log_likelihoods(
+        path,
+        x,
+        [Likelihoods(s) for s in stds],
+        k=400,
+        chunk=80,
+        generator=torch.Generator().manual_seed(7),
+    )
+    assert together.shape == (3, len(x))
+    for row, std in zip(together, stds):
+        alone = iw_log_likelihood(
+            path, x, Likelihoods(std), k=400, chunk=80, generator=torch.Generator().manual_seed(7)
+        )
+        torch.testing.assert_close(row, alone, atol=1e-4, rtol=0)
+    assert (together[0] - together[1]).abs().min() > 50  # different conventions, not one copied
+
+
+def test_unit_variance_row_matches_its_closed_form():
+    """Scored under std 1 (Table I's main convention), with the std-1 posterior as proposal, the
+    estimate is the exact log N(x; b, W W^T + I), while the std-0.1 row of the same pass is a
+    different number (its own density)."""
+    w, b, x = _model(5)
+    mean, logvar, _ = _posterior(w, b, x, std=1.0)
+    est = iw_log_likelihoods(
+        _path(mean, logvar, w, b),
+        x,
+        [Likelihoods(1.0), Likelihoods(STD)],
+        k=2000,
+        generator=torch.Generator().manual_seed(2),
+    )
+    torch.testing.assert_close(est[0], _exact(w, b, x, std=1.0), atol=0.05, rtol=0)
+    assert (est[1] - _exact(w, b, x, std=1.0)).abs().min() > 50
+
+
+def test_an_empty_list_of_likelihoods_is_refused():
+    w, b, x = _model()
+    mean, logvar, _ = _posterior(w, b, x)
+    with pytest.raises(UsageError, match="no likelihood"):
+        iw_log_likelihoods(_path(mean, logvar, w, b), x, [], k=3)

@@ -73,3 +73,62 @@ def test_bad_inputs_are_named(tmp_path):
         summarize.fill_block("# README without blocks\n", "demo", "x")
     with pytest.raises(summarize.SummaryError, match="missing"):
         summarize.demo_markdown(tmp_path)
+
+
+def _row(text: str, after: str, model: str) -> list[str]:
+    """The cells of ``model``'s row in the first table after the text ``after``."""
+    lines = text.split(after, 1)[1].splitlines()
+    first = next(i for i, x in enumerate(lines) if x.startswith("|"))
+    table = lines[first : next((i for i in range(first, len(lines)) if not lines[i]), None)]
+    (line,) = [x for x in table if x.startswith(f"| {model} ")]
+    return [c.strip() for c in line.strip("|").split("|")][1:]
+
+
+def _demo_with(tmp_path, evaluate: dict) -> str:
+    demo = tmp_path / "demo"
+    shutil.copytree(summarize.DEMO, demo)
+    kept = json.loads((demo / "evaluate.json").read_text())
+    kept = {k: v for k, v in kept.items() if k.startswith("classifier/")}
+    (demo / "evaluate.json").write_text(json.dumps({**kept, **evaluate}))
+    return summarize.demo_markdown(demo)
+
+
+TABLE1 = "**Table I**"
+OWN = "The trajectory cells under each model's own std"
+COHERENCE = "**Cross-modal coherence**"
+SMOOTHNESS = "**Smoothness**"
+
+
+def test_demo_tables_show_the_paper_convention_folded_coherence_and_roughness(tmp_path):
+    text = _demo_with(
+        tmp_path,
+        {
+            "avae_ts/logp_T": -196.61,
+            "avae_ts/logp_T_model_std": 206.16,
+            "avae_ts/logp_S": -5.21,
+            "avae_ts/coherence_T_given_S": 0.7258,
+            "avae_ts/coherence_folded_T_given_S": 0.8012,
+            "avae_ts/roughness_ratio_T_given_S": 1.234,
+            "test_split/roughness": 0.0814,
+        },
+    )
+    # T, S, I, T|S, T|I, S|T, I|T, val loss: ours (paper)
+    assert _row(text, TABLE1, "PRG_AVAE(T,S)")[:2] == ["-196.6 (-197.55)", "-5.2 (-4.17)"]
+    assert _row(text, OWN, "PRG_AVAE(T,S)")[0] == "206.2"
+    assert _row(text, OWN, "PRG_MUSE(T,S,I)") == ["-", "-", "-"]  # missing: '-'
+    assert _row(text, COHERENCE, "PRG_AVAE(T,S)")[0] == "73% / 80%"
+    assert _row(text, SMOOTHNESS, "PRG_AVAE(T,S)") == ["1.23", "-"]
+    assert "(0.081)" in text.split(SMOOTHNESS)[1]
+    assert "predates" not in text
+
+
+def test_an_old_snapshot_shows_its_trajectory_cells_only_under_the_models_own_std(tmp_path):
+    """Before the two conventions, `logp_T*` held the models' own std (0.1)."""
+    text = _demo_with(
+        tmp_path,
+        {"avae_ts/logp_T": 206.16, "avae_ts/logp_S": -5.21, "avae_ts/coherence_T_given_S": 0.7},
+    )
+    assert _row(text, TABLE1, "PRG_AVAE(T,S)")[:2] == ["-", "-5.2 (-4.17)"]
+    assert _row(text, OWN, "PRG_AVAE(T,S)")[0] == "206.2"
+    assert "predates the unit-variance table" in text.split(OWN)[0]
+    assert _row(text, COHERENCE, "PRG_AVAE(T,S)")[0] == "70% / -"

@@ -12,6 +12,14 @@ Writes ``reports/table1.{md,csv}``, ``reports/coherence.{md,csv}``, ``reports/ro
 ``reports/metrics.json`` and ``reports/figures/``; metrics also go to MLflow, into each model's
 training run (``test/logp_T_given_S``, ``test/coherence_T_given_S`` ...) and into one
 ``evaluate`` run that holds the reports as artifacts.
+
+Metric keys (``<model>/...``): Table I cells ``logp_T``, ``logp_T_given_S`` ... with trajectory
+targets under a Gaussian of std ``likelihood.traj_std`` (default 1.0, the paper's scale), and
+``logp_T_model_std``, ``logp_T_given_S_model_std`` ... under the model's own std, from the same
+importance samples; coherence ``coherence_T_given_S`` (exact class) and
+``coherence_folded_T_given_S`` (shape twins such as o/O/0 counted right), ``_sampled_`` for the
+temperature-1 kind; ``roughness_ratio_T_given_S`` / ``_T_given_I`` (decoded letters' median
+roughness over the test letters', whose median is ``test_split/roughness``).
 """
 
 from __future__ import annotations
@@ -33,8 +41,14 @@ from prg.data.build import git_commit, staged_outputs, write_json
 from prg.data.store import load_split
 from prg.errors import UsageError
 from prg.evaluation.classifiers import ensure_classifiers
-from prg.evaluation.coherence import coherence_cells, generated_classes, per_class_rate
-from prg.evaluation.likelihood import TABLE1_CELLS, estimate_cell
+from prg.evaluation.coherence import (
+    coherence_cells,
+    folded_correct,
+    generated_classes,
+    generated_samples,
+    per_class_rate,
+)
+from prg.evaluation.likelihood import MODEL_STD_SUFFIX, TABLE1_CELLS, estimate_cell_multi
 from prg.evaluation.reports import (
     PAPER_TABLE1,
     coherence_markdown,
@@ -44,6 +58,7 @@ from prg.evaluation.reports import (
     title,
     to_csv,
 )
+from prg.evaluation.smoothness import median_roughness
 from prg.models.base import LETTER, MultimodalVAE
 from prg.models.checkpoint import load_model
 from prg.models.likelihoods import Likelihoods
@@ -52,8 +67,33 @@ log = logging.getLogger(__name__)
 
 PARTS = ("classifiers", "likelihood", "coherence")
 FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse")
-TABLE1_COLUMNS = ("model", "family", "cell", "value", "sem", "paper", "k", "n_test", "seconds")
-COHERENCE_COLUMNS = ("model", "family", "target", "given", "kind", "temperature", "coherence", "n")
+TABLE1_COLUMNS = (
+    "model",
+    "family",
+    "cell",
+    "value",
+    "sem",
+    "paper",
+    "traj_std",
+    "k",
+    "n_test",
+    "seconds",
+)
+COHERENCE_COLUMNS = (
+    "model",
+    "family",
+    "target",
+    "given",
+    "kind",
+    "temperature",
+    "coherence",
+    "coherence_folded",
+    "n",
+)
+# Inputs from which decoded letters are scored for roughness: each single non-trajectory
+# modality a model accepts (labels: cvae, avae_ts, muse; images: avae_ti, muse).
+ROUGHNESS_INPUTS = (("label",), ("image",))
+TEST_ROUGHNESS_KEY = "test_split/roughness"
 
 
 @dataclass
@@ -62,6 +102,7 @@ class Evaluation:
 
     table1: list[dict] = field(default_factory=list)
     coherence: list[dict] = field(default_factory=list)
+    smoothness: list[dict] = field(default_factory=list)
     classifiers: dict[str, dict] = field(default_factory=dict)
     metrics: dict[str, Any] = field(default_factory=dict)
     report_dir: Path | None = None
@@ -88,7 +129,7 @@ def _check_config(cfg: DictConfig) -> list[str]:
             raise UsageError(f"{key} must be null (all) or an integer >= 1, got {value!r}")
     if lk.traj_std is not None and not _is_number(lk.traj_std, False, 0, strict=True):
         raise UsageError(
-            f"likelihood.traj_std must be null (the model's own) or > 0, got {lk.traj_std!r}"
+            f"likelihood.traj_std must be null (each model's own) or > 0, got {lk.traj_std!r}"
         )
     for kind, value in cfg.coherence.temperatures.items():
         if not _is_number(value, integer=False, minimum=0):
@@ -168,6 +209,9 @@ def _progress(items, desc: str, enabled: bool):
 
 # ---- the three parts -------------------------------------------------------------------------
 def likelihood_rows(models, test: dict[str, torch.Tensor], cfg: DictConfig) -> list[dict]:
+    """Table I rows: one per (model, cell) in the main table's convention, plus one per
+    trajectory-target cell under the model's own std (cell ``<cell>_model_std``), both from one
+    importance-sampling pass."""
     cells, explicit = _requested_cells(cfg)
     lk = cfg.likelihood
     data = _subset(test, lk.n_test, cfg.seed)
@@ -180,38 +224,45 @@ def likelihood_rows(models, test: dict[str, torch.Tensor], cfg: DictConfig) -> l
             elif explicit:
                 model.check_cell(target, {m: data[m] for m in given})  # raises, naming both
     rows = []
-    override = Likelihoods(traj_std=lk.traj_std) if lk.traj_std is not None else None
-
     for name, model, cell in _progress(jobs, "Table I cells", cfg.progress):
         target, given = TABLE1_CELLS[cell]
         k = lk.k_conditional if given else lk.k_marginal
+        own = model.likelihoods
+        main = own if lk.traj_std is None else Likelihoods(traj_std=float(lk.traj_std))
+        # trajectory targets: the main convention and the model's own std from the same samples
+        conventions = [(cell, main, PAPER_TABLE1.get(model.family, {}).get(cell))]
+        if target == "traj":
+            conventions.append((f"{cell}{MODEL_STD_SUFFIX}", own, None))
         start = time.perf_counter()
-        values = estimate_cell(
+        values = estimate_cell_multi(
             model,
             target,
             given,
             data,
             k,
+            [lik for _, lik, _ in conventions],
             lk.batch_size,
             lk.chunk_rows,
             cfg.seed,
             cfg.progress,
-            override,
         )
-        rows.append(
-            {
-                "model": name,
-                "family": model.family,
-                "cell": cell,
-                "value": values.mean().item(),
-                "sem": (values.std() / math.sqrt(len(values))).item() if len(values) > 1 else 0.0,
-                "paper": PAPER_TABLE1.get(model.family, {}).get(cell),
-                "k": k,
-                "n_test": len(values),
-                "seconds": round(time.perf_counter() - start, 2),
-            }
-        )
-        log.info("%s %s = %.2f (K=%d)", name, cell, rows[-1]["value"], k)
+        seconds = round(time.perf_counter() - start, 2)
+        for (key, lik, paper), v in zip(conventions, values, strict=True):
+            rows.append(
+                {
+                    "model": name,
+                    "family": model.family,
+                    "cell": key,
+                    "value": v.mean().item(),
+                    "sem": (v.std() / math.sqrt(len(v))).item() if len(v) > 1 else 0.0,
+                    "paper": paper,
+                    "traj_std": lik.traj_std if target == "traj" else None,
+                    "k": k,
+                    "n_test": len(v),
+                    "seconds": seconds,
+                }
+            )
+            log.info("%s %s = %.2f (K=%d)", name, key, rows[-1]["value"], k)
     return rows
 
 
@@ -243,6 +294,7 @@ def coherence_rows(
                 "kind": kind,
                 "temperature": temperature,
                 "coherence": correct.float().mean().item(),
+                "coherence_folded": folded_correct(predicted, data["label"]).float().mean().item(),
                 "n": len(correct),
             }
         )
@@ -252,23 +304,78 @@ def coherence_rows(
     return rows, per_class
 
 
+def roughness_rows(models, test: dict[str, torch.Tensor], cfg: DictConfig) -> list[dict]:
+    """Roughness of the letters each model decodes (posterior mean) from labels and from images,
+    as a ratio to the roughness of the same test samples' letters
+    (:mod:`prg.evaluation.smoothness`)."""
+    data = _subset(test, cfg.n_test, cfg.seed)
+    reference = median_roughness(data["traj"].numpy())
+    rows = []
+    for name, (model, _, _) in models.items():
+        if "traj" not in model.generated_modalities:
+            continue
+        for given in ROUGHNESS_INPUTS:
+            if given not in model.accepted_inputs:
+                continue
+            decoded = generated_samples(
+                model, "traj", given, data, 0.0, cfg.coherence.batch_size, cfg.seed
+            ).numpy()
+            median = median_roughness(decoded)
+            rows.append(
+                {
+                    "model": name,
+                    "family": model.family,
+                    "target": "traj",
+                    "given": subset_name(given),
+                    "roughness": median,
+                    "reference": reference,
+                    "ratio": median / reference if reference > 0 else math.nan,
+                    "n": len(decoded),
+                }
+            )
+            log.info(
+                "%s roughness T from %s: %.3f (ratio %.2f)",
+                name,
+                subset_name(given),
+                median,
+                rows[-1]["ratio"],
+            )
+    return rows
+
+
 # ---- outputs ---------------------------------------------------------------------------------
-def _metric_key(row: dict) -> str:
+def _metric_key(row: dict, folded: bool = False) -> str:
     if "cell" in row:
         return row["cell"]
     target = LETTER[row["target"]]
     given = row["given"].replace(",", "")
-    prefix = "coherence" if row["kind"] == "mean" else f"coherence_{row['kind']}"
+    prefix = "coherence_folded" if folded else "coherence"
+    if row["kind"] != "mean":
+        prefix += f"_{row['kind']}"
     return f"{prefix}_{target}_given_{given}"
 
 
+def _finite(value: float) -> bool:
+    return value is not None and math.isfinite(value)
+
+
 def metrics_of(result: Evaluation) -> dict[str, Any]:
-    """Flat ``<model>/<metric>`` values for metrics.json and MLflow."""
+    """Flat ``<model>/<metric>`` values for metrics.json and MLflow (non-finite roughness values
+    are left out: they are shown as nan in coherence.md)."""
     metrics: dict[str, Any] = {}
     for row in result.table1:
         metrics[f"{row['model']}/{row['cell']}"] = round(row["value"], 4)
     for row in result.coherence:
         metrics[f"{row['model']}/{_metric_key(row)}"] = round(row["coherence"], 4)
+        metrics[f"{row['model']}/{_metric_key(row, folded=True)}"] = round(
+            row["coherence_folded"], 4
+        )
+    for row in result.smoothness:
+        key = f"roughness_ratio_{LETTER[row['target']]}_given_{row['given'].replace(',', '')}"
+        if _finite(row["ratio"]):
+            metrics[f"{row['model']}/{key}"] = round(row["ratio"], 4)
+    if result.smoothness and _finite(result.smoothness[0]["reference"]):
+        metrics[TEST_ROUGHNESS_KEY] = round(result.smoothness[0]["reference"], 4)
     for modality, meta in result.classifiers.items():
         metrics[f"classifier/{modality}/test_accuracy"] = round(meta["test_accuracy"], 4)
     return metrics
@@ -319,10 +426,10 @@ def _setup_line(cfg: DictConfig, models, part: str) -> str:
     ckpts = ", ".join(f"{n}: {p}" for n, (_, _, p) in models.items())
     if part == "likelihood":
         n = lk.n_test if lk.n_test is not None else "all"
-        std = "each model's own" if lk.traj_std is None else lk.traj_std
+        std = "each model's own" if lk.traj_std is None else f"{lk.traj_std:g}"
         what = (
             f"K = {lk.k_marginal} (marginals) / {lk.k_conditional} (conditionals), "
-            f"test samples: {n}, trajectory std: {std}"
+            f"test samples: {n}, trajectory std: {std} (second table: each model's own)"
         )
     else:
         what = f"test samples: {cfg.n_test if cfg.n_test is not None else 'all'}"
@@ -336,13 +443,15 @@ def write_reports(result: Evaluation, models, per_class, data, cfg: DictConfig, 
         if "likelihood" in parts:
             (staging / "table1.csv").write_text(to_csv(result.table1, TABLE1_COLUMNS))
             (staging / "table1.md").write_text(
-                table1_markdown(result.table1, _setup_line(cfg, models, "likelihood"))
+                table1_markdown(
+                    result.table1, _setup_line(cfg, models, "likelihood"), cfg.likelihood.traj_std
+                )
             )
         if "coherence" in parts:
             setup = _setup_line(cfg, models, "coherence")
             (staging / "coherence.csv").write_text(to_csv(result.coherence, COHERENCE_COLUMNS))
             (staging / "coherence.md").write_text(
-                coherence_markdown(result.coherence, result.classifiers, setup)
+                coherence_markdown(result.coherence, result.classifiers, setup, result.smoothness)
             )
             kind = next(iter(cfg.coherence.temperatures))
             (staging / "robustness.md").write_text(
@@ -425,6 +534,7 @@ def evaluate(cfg: DictConfig) -> Evaluation:
         )
         result.classifiers = _classifier_meta(classifier_dir)
         result.coherence, per_class = coherence_rows(models, classifiers, test, cfg)
+        result.smoothness = roughness_rows(models, test, cfg)
     result.metrics = metrics_of(result)
     result.report_dir = write_reports(result, models, per_class, test, cfg, parts)
     log_to_mlflow(result, models, cfg)

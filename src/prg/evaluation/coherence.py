@@ -7,6 +7,11 @@ independent classifier (:mod:`prg.evaluation.classifiers`, trained on the traini
 assigns it the test sample's class; a generated label when its most probable class is the
 test sample's class (this is the label accuracy from S). When t is in S the cell measures
 reconstruction, not cross-modal transfer; the robustness table shows those too.
+
+Coherence is reported exact and *folded*: the folded rate also counts a generated sample whose
+class is a shape twin of the true one (o/O/0, x/X, i/I/l ...,
+:data:`~prg.evaluation.classifiers.SHAPE_TWINS`), letters that are the same shape once size and
+position are normalised away, so neither a classifier nor a reader can tell them apart.
 """
 
 from __future__ import annotations
@@ -16,7 +21,7 @@ from collections.abc import Mapping
 import torch
 from torch import nn
 
-from prg.evaluation.classifiers import predict
+from prg.evaluation.classifiers import FOLD, predict
 from prg.models.base import Inputs, MultimodalVAE
 
 
@@ -38,18 +43,54 @@ def generated_classes(
     seed: int = 0,
 ) -> torch.Tensor:
     """Class assigned to each generated ``target`` sample (shape (N,), long)."""
+    out = torch.empty(len(data["label"]), dtype=torch.long)
+    for rows, generated in _generated_batches(
+        model, target, given, data, temperature, batch_size, seed
+    ):
+        out[rows] = (
+            generated.argmax(-1) if target == "label" else predict(classifiers[target], generated)
+        )
+    return out
+
+
+@torch.no_grad()
+def generated_samples(
+    model: MultimodalVAE,
+    target: str,
+    given: tuple[str, ...],
+    data: Inputs,
+    temperature: float = 0.0,
+    batch_size: int = 512,
+    seed: int = 0,
+) -> torch.Tensor:
+    """One generated ``target`` sample per test sample (shape (N, ...)), drawn as
+    :func:`generated_classes` draws them."""
+    return torch.cat(
+        [
+            g
+            for _, g in _generated_batches(
+                model, target, given, data, temperature, batch_size, seed
+            )
+        ]
+    )
+
+
+def _generated_batches(model, target, given, data, temperature, batch_size, seed):
     torch.manual_seed(seed)  # generate() draws latents from the global generator
     n = len(data["label"])
-    out = torch.empty(n, dtype=torch.long)
     for start in range(0, n, batch_size):
         rows = slice(start, start + batch_size)
         generated = model.generate(
             {m: data[m][rows] for m in given}, target, n=1, temperature=temperature
         )[0]
-        out[rows] = (
-            generated.argmax(-1) if target == "label" else predict(classifiers[target], generated)
-        )
-    return out
+        yield rows, generated
+
+
+def folded_correct(predicted: torch.Tensor, labels: torch.Tensor) -> torch.Tensor:
+    """Whether each prediction lies in its true class's shape-twin group
+    (:data:`~prg.evaluation.classifiers.SHAPE_TWINS`: o/O/0, x/X ... count as right)."""
+    fold = torch.from_numpy(FOLD)
+    return fold[predicted] == fold[labels]
 
 
 def per_class_rate(correct: torch.Tensor, labels: torch.Tensor, num_classes: int) -> torch.Tensor:

@@ -35,6 +35,15 @@ def roughness(traj: np.ndarray) -> np.ndarray:
         return np.where(length > 0, second / length, np.nan)
 
 
+def median_roughness(traj: np.ndarray) -> float:
+    """Median :func:`roughness` over trajectories with a length (NaN when none has one)."""
+    values = roughness(traj).ravel()
+    values = values[~np.isnan(values)]
+    return float(np.median(values)) if values.size else float("nan")
+
+
 def roughness_ratio(decoded: np.ndarray, reference: np.ndarray) -> float:
-    """Median roughness of ``decoded`` over the median roughness of ``reference``."""
-    return float(np.nanmedian(roughness(decoded)) / np.nanmedian(roughness(reference)))
+    """Median roughness of ``decoded`` over the median roughness of ``reference`` (NaN when the
+    reference's median is 0 or undefined)."""
+    ref = median_roughness(reference)
+    return median_roughness(decoded) / ref if ref > 0 else float("nan")
