@@ -12,7 +12,7 @@ STAMP := $(VENV)/.setup-$(shell cat pyproject.toml | sha1sum | cut -c1-12)
 export PATH := $(CURDIR)/$(BIN):$(PATH)
 
 .DEFAULT_GOAL := help
-.PHONY: help system setup demo paper test test-all lint format bench results clean
+.PHONY: help system setup demo paper converged test test-all lint format bench results clean
 
 help: ## Show this help
 	@awk 'BEGIN {FS = ":.*## "} /^[a-zA-Z_-]+:.*## / {printf "  \033[36m%-10s\033[0m %s\n", $$1, $$2}' $(MAKEFILE_LIST)
@@ -54,6 +54,12 @@ demo: setup ## Run the whole pipeline (dvc repro): data, models, evaluation, Tab
 # Options after PAPER_ARGS=, e.g. PAPER_ARGS="--families muse --device auto" (python -m prg.paper_scale -h)
 paper: setup ## Paper scale on one GPU: the 4 families (experiment=paper) at once, then K=1000/5000 -> paper/
 	$(BIN)/python -m prg.paper_scale $(PAPER_ARGS)
+
+# The whole split at K=1000/5000 takes ~11 h on 2 CPU cores (image cells): Table I on 100 test
+# samples by default, coherence and robustness on the whole split; CONVERGED_ARGS= for all of it.
+CONVERGED_ARGS ?= --n-test-likelihood 100
+converged: setup ## Converged profile on this machine: the 4 families (experiment=converged), then K=1000/5000 -> converged/
+	$(BIN)/python -m prg.paper_scale --profile converged --device auto $(CONVERGED_ARGS)
 
 test: setup ## Run the default test suite (fast; no `slow` tests)
 	$(BIN)/pytest -m "not slow" -n 2 -q

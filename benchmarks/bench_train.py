@@ -1,4 +1,21 @@
-"""Benchmark training throughput: PRGModule under a Lightning Trainer against a plain PyTorch loop.
+"""Benchmark training: Lightning overhead, the fast recipe's speed techniques, time to quality.
+
+Three parts (``--parts``, all by default), each compared with its reference in the same run:
+
+1. ``throughput`` — PRGModule under a Lightning Trainer against a plain PyTorch loop (below).
+2. ``techniques`` — MUSE samples per second of a plain loop with each speed technique of the fast
+   recipe (``conf/experiment/_recipe_.yaml``) added in turn, against the paper's plain fp32 loop
+   at batch 64, on the same batches: batch 128, bf16 autocast, channels-last images,
+   ``torch.compile`` (``--compile``; measured, not part of the recipe). Ratio = technique / fp32.
+3. ``quality`` — CPU minutes (process CPU time, all threads, evaluation excluded) until MUSE's
+   T-from-S coherence (posterior mean, whole test split, case twins folded) first reaches
+   ``--target`` (0.85): ``prg-train``'s ``experiment=quick`` (the recipe, the demo's budget)
+   against the paper's recipe (Adam 1e-4, batch 64, fp32, constant rate), the paper's run capped
+   at ``--cap`` times ours (reported as "not reached in N min" if it does not get there).
+   Ratio = paper / ours (target >= 5). Needs the full prepared dataset and the evaluation
+   classifiers (``make demo`` or ``prg-prepare`` + ``prg-evaluate parts=[classifiers]``).
+
+Part 1:
 
 For each family (cvae, avae_ts, avae_ti, muse) the same network (same class, same seed, the
 family's config from ``conf/model/<family>.yaml``), the same Adam, batch size (the paper's: 128
@@ -15,8 +32,10 @@ of the last timed batch, measured by a callback, so trainer set-up is excluded; 
 is reported apart). The two sides alternate ``--reps`` times (plain, lightning, plain, ...)
 and the medians are compared: ratio = lightning / plain samples per second (target >= 0.9).
 
-Usage: ``python benchmarks/bench_train.py [--families cvae muse] [--batches 60] [--reps 3]``
-Prints a table and writes ``benchmarks/results/bench_train.json``.
+Usage: ``python benchmarks/bench_train.py [--parts throughput techniques quality]
+[--families cvae muse] [--batches 60] [--reps 3] [--compile] [--cap 5]``
+Prints a table per part and writes ``benchmarks/results/bench_train.json`` (the parts not run
+keep their previous results).
 """
 
 from __future__ import annotations
@@ -45,6 +64,7 @@ RESULTS = Path(__file__).parent / "results"
 REPO = Path(__file__).resolve().parents[1]
 FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse")
 TARGET = 0.9
+PARTS = ("throughput", "techniques", "quality")
 
 
 def family_config(family: str) -> dict:
@@ -125,75 +145,255 @@ def run_lightning(module_cfg: dict, loader, warmup: int, n: int, seed: int) -> t
     return clock.seconds, time.perf_counter() - t0
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--families", nargs="+", default=list(FAMILIES), choices=FAMILIES)
-    parser.add_argument("--batches", type=int, default=60, help="timed batches per run")
-    parser.add_argument("--warmup", type=int, default=5, help="untimed batches per run")
-    parser.add_argument("--reps", type=int, default=3, help="alternating runs per side")
-    parser.add_argument(
-        "--threads", type=int, default=1, help="torch threads, the same for both sides"
-    )
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--data-dir", type=Path, default=REPO / "data")
-    args = parser.parse_args()
+# ---- part 2: speed techniques -----------------------------------------------------------------
+TECHNIQUES = {  # name -> (batch size, bf16 autocast, channels-last images, torch.compile)
+    "fp32, batch 64 (paper)": (64, False, False, False),
+    "batch 128": (128, False, False, False),
+    "batch 128 + bf16 autocast": (128, True, False, False),
+    "batch 128 + bf16 + channels-last": (128, True, True, False),
+    "batch 128 + bf16 + torch.compile": (128, True, False, True),
+}
 
-    torch.set_num_threads(args.threads)
-    warnings.filterwarnings("ignore", ".*does not have many workers.*")
-    warnings.filterwarnings("ignore", ".*LeafSpec.*")
-    warnings.filterwarnings("ignore", ".*no `val_dataloader`.*")
-    logging.getLogger("lightning.pytorch").setLevel(logging.WARNING)
+
+def run_technique(module_cfg: dict, train: dict, technique: tuple, n: int, warmup: int) -> float:
+    """Samples per second of a plain MUSE loop over ``n`` batches drawn from ``train``."""
+    batch_size, bf16, channels_last, compiled = technique
+    torch.manual_seed(0)
+    model = instantiate(module_cfg["model"], _convert_="all")
+    memory_format = torch.channels_last if channels_last else torch.contiguous_format
+    model = model.to(memory_format=memory_format)
+    opt = instantiate(module_cfg["optimizer"])(params=model.parameters())
+    elbo = torch.compile(model.elbo) if compiled else model.elbo
+    order = torch.randperm(len(train["label"]), generator=torch.Generator().manual_seed(0))
+    start = None
+    for i in range(warmup + n):
+        rows = order[i * batch_size : (i + 1) * batch_size]
+        batch = {k: v[rows] for k, v in train.items()}
+        batch["image"] = batch["image"].float().div(255).unsqueeze(1)
+        batch["image"] = batch["image"].contiguous(memory_format=memory_format)
+        with torch.autocast("cpu", dtype=torch.bfloat16, enabled=bf16):
+            loss = elbo(batch)["loss"]
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        if i == warmup - 1:
+            start = time.perf_counter()
+    return n * batch_size / (time.perf_counter() - start)
+
+
+def techniques_part(data_dir: Path, args) -> dict:
+    from prg.data.store import load_split
+
+    arrays = load_split(data_dir / "prepared/synthetic/train.npz")
+    train = {
+        "traj": torch.from_numpy(arrays["traj"]).float(),
+        "image": torch.from_numpy(arrays["image"]),
+        "label": torch.from_numpy(arrays["label"].astype("int64")),
+    }
+    cfg = family_config("muse")
+    names = [t for t in TECHNIQUES if args.compile or not TECHNIQUES[t][3]]
+    speeds: dict[str, list[float]] = {t: [] for t in names}
+    for _ in range(args.reps):  # alternate the techniques so drifts in load hit all of them
+        for name in names:
+            speeds[name].append(
+                run_technique(cfg["module"], train, TECHNIQUES[name], args.batches, args.warmup)
+            )
+            print(f"  {name}: {speeds[name][-1]:.0f} samples/s", flush=True)
+    reference = statistics.median(speeds[names[0]])
+    rows = {
+        name: {
+            "samples_per_s": round(statistics.median(v), 1),
+            "runs": [round(x, 1) for x in v],
+            "ratio": round(statistics.median(v) / reference, 3),
+        }
+        for name, v in speeds.items()
+    }
+    print(f"\nMUSE training throughput by technique ({args.threads} thread(s), plain loop)")
+    print(f"{'technique':<36}{'samples/s':>11}{'ratio':>8}")
+    for name, r in rows.items():
+        print(f"{name:<36}{r['samples_per_s']:>11.0f}{r['ratio']:>8.2f}")
+    return {"family": "muse", "reference": names[0], "techniques": rows}
+
+
+# ---- part 3: time to quality ------------------------------------------------------------------
+class QualityClock(L.Callback):
+    """Every ``every`` steps: T-from-S coherence (folded) on the test split, against the process
+    CPU time spent training so far (the evaluation's own CPU time is excluded). Stops the run
+    when ``target`` is reached or ``cap_s`` CPU seconds are spent."""
+
+    def __init__(self, test: dict, classifier, every: int, target: float, cap_s: float):
+        self.test, self.classifier, self.every = test, classifier, every
+        self.target, self.cap_s = target, cap_s
+        self.history: list[tuple[int, float, float]] = []
+        self.reached_s: float | None = None
+        self._start = self._excluded = 0.0
+
+    def on_train_start(self, trainer, pl_module):
+        self._start, self._excluded = time.process_time(), 0.0
+
+    def cpu_s(self) -> float:
+        return time.process_time() - self._start - self._excluded
+
+    def on_train_batch_end(self, trainer, pl_module, outputs, batch, batch_idx):
+        step = trainer.global_step
+        last = trainer.fit_loop.epoch_loop.batch_progress.is_last_batch and (
+            trainer.current_epoch + 1 >= trainer.max_epochs
+        )
+        if step % self.every and not last:
+            return
+        spent = self.cpu_s()
+        paused = time.process_time()
+        value = coherence_t_from_s(pl_module.model, self.test, self.classifier)
+        self._excluded += time.process_time() - paused
+        self.history.append((step, round(spent, 1), round(value, 4)))
+        print(f"  step {step}: {spent / 60:.1f} CPU min, T from S {value:.3f}", flush=True)
+        if value >= self.target and self.reached_s is None:
+            self.reached_s = spent
+            trainer.should_stop = True
+        elif spent >= self.cap_s:
+            trainer.should_stop = True
+
+
+def coherence_t_from_s(model, test: dict, classifier) -> float:
+    """Folded coherence of trajectories decoded from the test labels (posterior mean)."""
+    from prg.evaluation.classifiers import folded_accuracy
+    from prg.evaluation.coherence import generated_classes
+
+    was_training = model.training
+    model.eval()
+    try:
+        predicted = generated_classes(model, "traj", ("label",), test, {"traj": classifier})
+    finally:
+        model.train(was_training)
+    return folded_accuracy(predicted, test["label"])
+
+
+def run_to_quality(profile: str, data_dir: Path, clock: QualityClock, tmp: str) -> dict:
+    """Train MUSE with ``experiment=<profile>`` until ``clock`` stops it or the budget ends."""
+    cfg = compose_config("train", ["model=muse", f"experiment={profile}"])
+    module = PRGModule(**{k: v for k, v in cfg.model.module.items() if k != "_target_"})
+    dm = PRGDataModule(data_dir, "synthetic", list(cfg.model.modalities), cfg.model.batch_size)
+    trainer = L.Trainer(
+        accelerator="cpu",
+        devices=1,
+        precision=cfg.trainer.precision,
+        max_epochs=cfg.trainer.max_epochs,
+        limit_train_batches=cfg.trainer.limit_train_batches,
+        limit_val_batches=0,
+        num_sanity_val_steps=0,
+        logger=False,
+        enable_checkpointing=False,
+        enable_progress_bar=False,
+        enable_model_summary=False,
+        callbacks=[clock],
+        default_root_dir=tmp,
+    )
+    trainer.fit(module, datamodule=dm)
+    return {
+        "profile": profile,
+        "batch_size": cfg.model.batch_size,
+        "precision": cfg.trainer.precision,
+        "max_epochs": cfg.trainer.max_epochs,
+        "steps": trainer.global_step,
+        "cpu_min_to_target": None if clock.reached_s is None else round(clock.reached_s / 60, 2),
+        "cpu_min_spent": round(clock.cpu_s() / 60, 2),
+        "history": clock.history,
+    }
+
+
+def quality_part(data_dir: Path, args, tmp: str) -> dict:
+    import numpy as np
+
+    from prg.data.store import load_split
+    from prg.evaluation.classifiers import load_classifier
+
+    path = args.data_dir.parent / "models/classifiers/traj.pt"
+    if not path.is_file():
+        raise SystemExit(f"bench_train: {path} missing: run `prg-evaluate parts=[classifiers]`")
+    classifier = load_classifier(path)[0]
+    arrays = load_split(data_dir / "prepared/synthetic/test.npz")
+    test = {"label": torch.from_numpy(arrays["label"].astype(np.int64))}
+    print(f"ours (experiment=quick) until T from S >= {args.target}", flush=True)
+    ours = run_to_quality(
+        "quick", data_dir, QualityClock(test, classifier, args.every, args.target, 1e9), tmp
+    )
+    budget = ours["cpu_min_to_target"] or ours["cpu_min_spent"]
+    cap_s = args.cap * budget * 60
+    print(f"paper (experiment=paper) until {args.target}, capped at {cap_s / 60:.1f} CPU min")
+    every = args.every * 2  # the paper's batch is half ours: the same samples between checks
+    paper = run_to_quality(
+        "paper", data_dir, QualityClock(test, classifier, every, args.target, cap_s), tmp
+    )
+    ratio = None
+    if ours["cpu_min_to_target"] is not None:
+        paper_min = paper["cpu_min_to_target"] or paper["cpu_min_spent"]
+        ratio = round(paper_min / ours["cpu_min_to_target"], 2)  # a lower bound if not reached
+    result = {
+        "target": args.target,
+        "metric": "MUSE T-from-S coherence, posterior mean, whole test split, case twins folded",
+        "cap_multiple": args.cap,
+        "ours": ours,
+        "paper": paper,
+        "speedup": ratio,
+        "speedup_is_lower_bound": paper["cpu_min_to_target"] is None,
+    }
+
+    def said(run):
+        if run["cpu_min_to_target"] is not None:
+            return f"{run['cpu_min_to_target']:.1f} CPU min"
+        return f"not reached in {run['cpu_min_spent']:.1f} CPU min"
+
+    print(f"\nTime to MUSE T-from-S coherence {args.target} (folded), {args.threads} thread(s)")
+    print(f"  ours (quick profile): {said(ours)}")
+    print(f"  paper's recipe:       {said(paper)}")
+    if ratio is not None:
+        print(f"  speed-up: {'>= ' if result['speedup_is_lower_bound'] else ''}{ratio:.1f}x")
+    return result
+
+
+def throughput_part(data_dir: Path, data_source: str, args) -> dict:
+    """Part 1: Lightning against a plain loop for each family."""
     rows = {}
-    with tempfile.TemporaryDirectory() as tmp:
-        data_dir, data_source = prepare_data(args.data_dir, tmp)
-        n_train = None
-        for family in args.families:
-            cfg = family_config(family)
-            dm = PRGDataModule(
-                data_dir, "synthetic", cfg["modalities"], cfg["batch_size"], seed=args.seed
+    n_train = None
+    for family in args.families:
+        cfg = family_config(family)
+        dm = PRGDataModule(
+            data_dir, "synthetic", cfg["modalities"], cfg["batch_size"], seed=args.seed
+        )
+        dm.setup("fit")
+        n_train = len(dm.datasets["train"])
+        plain, light, setup = [], [], []
+        for _ in range(args.reps):
+            # a fresh, identically seeded loader for each run: the same batches for both
+            plain.append(
+                run_plain(cfg["module"], dm.train_dataloader(), args.warmup, args.batches, 0)
             )
-            dm.setup("fit")
-            n_train = len(dm.datasets["train"])
-            plain, light, setup = [], [], []
-            for _ in range(args.reps):
-                # a fresh, identically seeded loader for each run: the same batches for both
-                plain.append(
-                    run_plain(cfg["module"], dm.train_dataloader(), args.warmup, args.batches, 0)
-                )
-                step_s, fit_s = run_lightning(
-                    cfg["module"], dm.train_dataloader(), args.warmup, args.batches, 0
-                )
-                light.append(step_s)
-                setup.append(fit_s)
-            samples = args.batches * cfg["batch_size"]
-            plain_sps = samples / statistics.median(plain)
-            light_sps = samples / statistics.median(light)
-            rows[family] = {
-                "batch_size": cfg["batch_size"],
-                "plain_samples_per_s": round(plain_sps, 1),
-                "lightning_samples_per_s": round(light_sps, 1),
-                "ratio": round(light_sps / plain_sps, 3),
-                "paired_ratios": [round(p / q, 3) for p, q in zip(plain, light)],
-                "plain_ms_per_step": [round(1000 * s / args.batches, 2) for s in plain],
-                "lightning_ms_per_step": [round(1000 * s / args.batches, 2) for s in light],
-                "lightning_fit_wall_s": [round(s, 2) for s in setup],
-            }
-            r = rows[family]
-            print(
-                f"{family}: plain {r['plain_ms_per_step']} ms/step, "
-                f"lightning {r['lightning_ms_per_step']} ms/step",
-                flush=True,
+            step_s, fit_s = run_lightning(
+                cfg["module"], dm.train_dataloader(), args.warmup, args.batches, 0
             )
+            light.append(step_s)
+            setup.append(fit_s)
+        samples = args.batches * cfg["batch_size"]
+        plain_sps = samples / statistics.median(plain)
+        light_sps = samples / statistics.median(light)
+        rows[family] = {
+            "batch_size": cfg["batch_size"],
+            "plain_samples_per_s": round(plain_sps, 1),
+            "lightning_samples_per_s": round(light_sps, 1),
+            "ratio": round(light_sps / plain_sps, 3),
+            "paired_ratios": [round(p / q, 3) for p, q in zip(plain, light)],
+            "plain_ms_per_step": [round(1000 * s / args.batches, 2) for s in plain],
+            "lightning_ms_per_step": [round(1000 * s / args.batches, 2) for s in light],
+            "lightning_fit_wall_s": [round(s, 2) for s in setup],
+        }
+        r = rows[family]
+        print(
+            f"{family}: plain {r['plain_ms_per_step']} ms/step, "
+            f"lightning {r['lightning_ms_per_step']} ms/step",
+            flush=True,
+        )
 
     report = {
-        "machine": {
-            "cpus": os.cpu_count(),
-            "python": platform.python_version(),
-            "torch": torch.__version__,
-            "lightning": L.__version__,
-            "processor": platform.processor() or platform.machine(),
-            "load_avg_at_end": [round(x, 2) for x in os.getloadavg()],
-        },
         "settings": {
             "threads": args.threads,
             "warmup_batches": args.warmup,
@@ -218,8 +418,53 @@ def main() -> None:
             f"{family:<9}{r['batch_size']:>6}{r['plain_samples_per_s']:>11.0f}"
             f"{r['lightning_samples_per_s']:>13.0f}{r['ratio']:>8.3f}{flag}"
         )
-    RESULTS.mkdir(exist_ok=True)
+    return report
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--parts", nargs="+", default=list(PARTS), choices=PARTS)
+    parser.add_argument("--families", nargs="+", default=list(FAMILIES), choices=FAMILIES)
+    parser.add_argument("--batches", type=int, default=60, help="timed batches per run")
+    parser.add_argument("--warmup", type=int, default=5, help="untimed batches per run")
+    parser.add_argument("--reps", type=int, default=3, help="alternating runs per side")
+    parser.add_argument(
+        "--threads", type=int, default=1, help="torch threads, the same for both sides"
+    )
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--data-dir", type=Path, default=REPO / "data")
+    parser.add_argument("--compile", action="store_true", help="also time torch.compile")
+    parser.add_argument("--target", type=float, default=0.85, help="T-from-S coherence to reach")
+    parser.add_argument("--every", type=int, default=110, help="steps between quality checks")
+    parser.add_argument("--cap", type=float, default=5.0, help="paper's budget, x ours")
+    args = parser.parse_args()
+
+    torch.set_num_threads(args.threads)
+    warnings.filterwarnings("ignore", ".*does not have many workers.*")
+    warnings.filterwarnings("ignore", ".*LeafSpec.*")
+    warnings.filterwarnings("ignore", ".*no `val_dataloader`.*")
+    logging.getLogger("lightning.pytorch").setLevel(logging.WARNING)
     out = RESULTS / "bench_train.json"
+    report = json.loads(out.read_text()) if out.is_file() else {}
+    with tempfile.TemporaryDirectory() as tmp:
+        data_dir, data_source = prepare_data(args.data_dir, tmp)
+        if "throughput" in args.parts:
+            report.update(throughput_part(data_dir, data_source, args))
+        if "techniques" in args.parts:
+            report["techniques"] = techniques_part(data_dir, args)
+        if "quality" in args.parts:
+            if data_source != "full prepared synthetic dataset":
+                raise SystemExit("bench_train: the quality part needs the full prepared dataset")
+            report["time_to_quality"] = quality_part(data_dir, args, tmp)
+    report["machine"] = {
+        "cpus": os.cpu_count(),
+        "python": platform.python_version(),
+        "torch": torch.__version__,
+        "lightning": L.__version__,
+        "processor": platform.processor() or platform.machine(),
+        "load_avg_at_end": [round(x, 2) for x in os.getloadavg()],
+    }
+    RESULTS.mkdir(exist_ok=True)
     out.write_text(json.dumps(report, indent=2) + "\n")
     print(f"\nwrote {out}")
 

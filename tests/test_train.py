@@ -230,3 +230,15 @@ def test_converged_profile_stops_when_validation_stops_improving(tmp_path, small
     )
     assert result.trainer.should_stop and result.trainer.current_epoch == 2  # 6 allowed
     assert _client(tmp_path).get_run(result.run_id).info.status == "FINISHED"
+
+
+def test_resuming_a_one_cycle_run_with_a_larger_budget_is_refused(tmp_path, small_dataset):
+    from prg.errors import UsageError
+
+    train(_cfg(tmp_path, small_dataset, "model=cvae", "experiment=quick", *FAST))
+    longer = _cfg(
+        tmp_path, small_dataset, "model=cvae", "experiment=quick", *FAST, "ckpt_path=last"
+    )
+    longer.trainer.max_epochs = 4
+    with pytest.raises(UsageError, match="schedule spans 6 steps, the resumed run asks for 12"):
+        train(longer)

@@ -1,22 +1,28 @@
-"""``python -m prg.paper_scale`` (``make paper``): the paper's scale on one GPU, in one command.
+"""``python -m prg.paper_scale`` (``make paper``, ``make converged``): train and evaluate the four
+families under one profile, in one command.
 
-Trains the four families at the paper's settings (``prg-train model=<family> experiment=paper``:
-Adam 1e-4, batch 128 / 64 (MUSE), 50 epochs, fp32) as four concurrent processes on one GPU,
-together with the two coherence classifiers, then evaluates them with ``prg-evaluate`` at the
-paper's K (1000 marginals / 5000 conditionals) on the whole test split. Everything goes under
-its own folder (``--root``, default ``paper/``), never into the demo's ``models/`` and
+``--profile paper`` (default, ``make paper``) trains at the paper's settings (``prg-train
+model=<family> experiment=paper``: Adam 1e-4, batch 128 / 64 (MUSE), 50 epochs, fp32), sized for
+one GPU; ``--profile converged`` (``make converged``) trains the fast recipe until validation stops
+improving (``experiment=converged``), sized for a CPU. The four trainings run as concurrent
+processes, together with the two coherence classifiers, then ``prg-evaluate`` runs at the paper's
+K (1000 marginals / 5000 conditionals), on the whole test split unless ``--n-test`` (all
+metrics) or ``--n-test-likelihood`` (Table I only) say otherwise. Everything goes under its own
+folder (``--root``, default the profile's name), never into the demo's ``models/`` and
 ``reports/``::
 
     paper/models/<family>/model.ckpt, metrics.json   the best checkpoint of each training
+                                                     (metrics.json: fit CPU and wall seconds)
     paper/models/classifiers/                        the coherence classifiers
     paper/checkpoints/<family>/                      best.ckpt, last.ckpt (resumable)
     paper/reports/table1.md, coherence.md, ...       prg-evaluate's reports
-    paper/reports/paper_scale.json                   wall time per stage, device, settings
+    paper/reports/paper_scale.json                   wall time per stage, fit CPU time per
+                                                     family, device, settings
     paper/logs/<job>.log                             each process's whole output
 
 MLflow runs go to the project's store (``--tracking-uri`` for another) in the experiment
-``prg-paper``; the training runs carry the tag ``prg.experiment=paper``, the evaluation run is
-named ``paper-evaluate``.
+``prg-<profile>``; the training runs carry the tag ``prg.experiment=<profile>``, the evaluation
+run is named ``<profile>-evaluate``.
 
 Each process's output is shown prefixed by its name (``[muse] ...``), its progress bar at most
 every ``--progress-every`` seconds. A process that fails stops the others and the command with
@@ -49,7 +55,7 @@ from prg.errors import PRGError, UsageError
 
 COMMAND = "prg.paper_scale"
 FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse")
-EXPERIMENT = "prg-paper"
+PROFILES = ("paper", "converged")
 DATA_NAME = "synthetic"
 # The Lightning progress bar is redrawn every this many steps: often enough to follow, rare
 # enough to cost nothing (a redraw formats every logged metric).
@@ -105,7 +111,14 @@ def build_parser() -> argparse.ArgumentParser:
         default=",".join(FAMILIES),
         help="comma-separated families to train and evaluate (default: all four)",
     )
-    p.add_argument("--root", default="paper", help="output folder (default: paper)")
+    p.add_argument(
+        "--profile",
+        choices=PROFILES,
+        default="paper",
+        help="training profile, experiment=PROFILE (default paper; converged: the fast recipe "
+        "until validation stops improving)",
+    )
+    p.add_argument("--root", help="output folder (default: the profile's name)")
     p.add_argument(
         "--device",
         choices=("cuda", "cpu", "auto"),
@@ -129,6 +142,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     budget.add_argument(
         "--n-test", type=_positive_int, help="test samples evaluated (default: the whole split)"
+    )
+    budget.add_argument(
+        "--n-test-likelihood",
+        type=_positive_int,
+        help="test samples for Table I only (default: --n-test); coherence and robustness "
+        "keep --n-test",
     )
     run = p.add_argument_group("processes")
     run.add_argument(
@@ -155,7 +174,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="evaluate the models already in ROOT/models (after a failed evaluation)",
     )
     run.add_argument("--tracking-uri", help="MLflow store (default: the project's mlruns.db)")
-    run.add_argument("--experiment-name", default=EXPERIMENT, help="MLflow experiment")
+    run.add_argument("--experiment-name", help="MLflow experiment (default: prg-PROFILE)")
     run.add_argument(
         "--train-set",
         action="append",
@@ -193,6 +212,8 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     if len(set(families)) != len(families):
         raise UsageError(f"--families {args.families!r}: a family is named twice")
     args.families = families
+    args.root = args.root or args.profile
+    args.experiment_name = args.experiment_name or f"prg-{args.profile}"
     if args.num_workers < 0:
         raise UsageError(f"--num-workers must be >= 0, got {args.num_workers}")
     if args.progress_every <= 0:
@@ -441,7 +462,7 @@ def train_overrides(args: argparse.Namespace, root: Path, family: str, accelerat
     """``prg-train`` overrides for one family (without the ``hydra.*`` ones: :func:`train_argv`)."""
     out = [
         f"model={family}",
-        "experiment=paper",
+        f"experiment={args.profile}",
         f"export_dir={root / 'models' / family}",
         f"checkpoint_dir={root / 'checkpoints' / family}",
         f"trainer.accelerator={'gpu' if accelerator == 'cuda' else 'cpu'}",
@@ -461,6 +482,7 @@ def train_overrides(args: argparse.Namespace, root: Path, family: str, accelerat
 
 def eval_overrides(args: argparse.Namespace, root: Path, accelerator: str) -> list[str]:
     n_test = "null" if args.n_test is None else args.n_test
+    n_likelihood = args.n_test_likelihood or n_test
     out = [
         f"families=[{','.join(args.families)}]",
         f"models_dir={root / 'models'}",
@@ -469,8 +491,8 @@ def eval_overrides(args: argparse.Namespace, root: Path, accelerator: str) -> li
         f"likelihood.k_marginal={args.k_marginal}",
         f"likelihood.k_conditional={args.k_conditional}",
         f"n_test={n_test}",
-        f"likelihood.n_test={n_test}",
-        "run_name=paper-evaluate",
+        f"likelihood.n_test={n_likelihood}",
+        f"run_name={args.profile}-evaluate",
     ]
     if _evaluate_has("device"):  # prg-evaluate runs on the CPU unless it offers a device
         out.append(f"device={accelerator}")
@@ -544,6 +566,7 @@ def run(args: argparse.Namespace, console: Console) -> dict[str, Any]:
         "torch": torch.__version__,
         "cpu_count": os.cpu_count(),
         "families": args.families,
+        "profile": args.profile,
         "settings": {
             "max_epochs": first.trainer.max_epochs,
             "limit_train_batches": first.trainer.limit_train_batches,
@@ -554,6 +577,7 @@ def run(args: argparse.Namespace, console: Console) -> dict[str, Any]:
             "k_marginal": args.k_marginal,
             "k_conditional": args.k_conditional,
             "n_test": args.n_test,
+            "n_test_likelihood": args.n_test_likelihood or args.n_test,
             "seed": args.seed,
             "num_workers": args.num_workers,
         },
@@ -565,7 +589,7 @@ def run(args: argparse.Namespace, console: Console) -> dict[str, Any]:
     begin = time.perf_counter()
     try:
         _stages(args, root, data_dir, accelerator, timings, console)
-        _tag_evaluate_run(eval_cfg)
+        _tag_evaluate_run(eval_cfg, args.profile)
         timings["status"] = "ok"
     except (PRGError, _Stopped) as err:
         timings["status"] = f"failed: {err}"
@@ -655,6 +679,7 @@ def _stages(
             stages["train"] = {
                 "seconds": round(time.perf_counter() - begin, 2),
                 "jobs": {j.name: j.seconds for j in jobs if j.started},
+                "fit": _fit_costs(root, trainings),
             }
 
     evaluate = [
@@ -674,8 +699,22 @@ def _stages(
         stages["evaluate"] = {"seconds": round(time.perf_counter() - begin, 2)}
 
 
-def _tag_evaluate_run(cfg: Any) -> None:
-    """Tag the newest ``paper-evaluate`` run as the paper profile, like the training runs."""
+def _fit_costs(root: Path, families: list[str]) -> dict[str, dict[str, float]]:
+    """Each finished training's fit cost from its ``metrics.json``: CPU seconds (all threads),
+    wall seconds, epochs and steps (the wall time of concurrent jobs overstates a lone run's)."""
+    import json
+
+    out = {}
+    for family in families:
+        path = root / "models" / family / "metrics.json"
+        if path.is_file():
+            metrics = json.loads(path.read_text())
+            out[family] = {k: metrics.get(k) for k in ("fit_cpu_s", "fit_wall_s", "epochs", "steps")}
+    return out
+
+
+def _tag_evaluate_run(cfg: Any, profile: str) -> None:
+    """Tag the newest ``<profile>-evaluate`` run with its profile, like the training runs."""
     from prg.tracking import task_client
 
     client, experiment = task_client(cfg)
@@ -686,13 +725,13 @@ def _tag_evaluate_run(cfg: Any) -> None:
         max_results=1,
     )
     if runs:
-        client.set_tag(runs[0].info.run_id, "prg.experiment", "paper")
+        client.set_tag(runs[0].info.run_id, "prg.experiment", profile)
 
 
 def summary(timings: dict[str, Any], root: Path, report_dir: Path) -> str:
     lines = [
         "",
-        f"Paper scale done in {_duration(timings['total_seconds'])} on {timings['device']} "
+        f"Profile {timings['profile']} done in {_duration(timings['total_seconds'])} on {timings['device']} "
         f"({timings['accelerator']}).",
     ]
     for stage, info in timings["stages"].items():

@@ -23,6 +23,7 @@ import json
 import logging
 import os
 import shutil
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -198,9 +199,14 @@ def _train(cfg: DictConfig) -> TrainResult:
         )
     )
     trainer: L.Trainer = _build(cfg.trainer, "trainer", logger=logger, callbacks=callbacks)
+    cpu_start, wall_start = time.process_time(), time.perf_counter()
     trainer.fit(module, datamodule=datamodule, ckpt_path=ckpt_path)
-
+    # the cost of this fit (a resumed run counts only its own part): CPU time of all threads
     metrics = {k: float(v) for k, v in trainer.callback_metrics.items()}
+    metrics["fit_cpu_s"] = time.process_time() - cpu_start
+    metrics["fit_wall_s"] = time.perf_counter() - wall_start
+    metrics["epochs"] = float(trainer.current_epoch)
+    metrics["steps"] = float(trainer.global_step)
     best = best_checkpoint(trainer)
     last = next((str(c.path) for c in callbacks if isinstance(c, LastCheckpoint)), "")
     if cfg.get("export_dir") and best and trainer.is_global_zero:  # DDP: rank 0 only

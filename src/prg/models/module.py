@@ -86,6 +86,19 @@ class PRGModule(L.LightningModule):
     def forward(self, batch: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
         return self.model.elbo(batch)
 
+    def on_train_start(self) -> None:
+        # A resumed run gets its scheduler back from the checkpoint, with the step count it was
+        # planned for; a larger budget would step a one-cycle schedule past its end.
+        for config in self.trainer.lr_scheduler_configs:
+            planned = getattr(config.scheduler, "total_steps", None)
+            wanted = int(self.trainer.estimated_stepping_batches)
+            if planned is not None and planned < wanted:
+                raise UsageError(
+                    f"this run's learning-rate schedule spans {planned} steps, the resumed run "
+                    f"asks for {wanted}: a schedule cannot be stretched; start a new run (or "
+                    f"keep the original max_epochs / limit_train_batches)"
+                )
+
     def on_train_batch_start(self, batch: Any, batch_idx: int) -> None:
         """Set MUSE's ``top_scale`` to the fraction of the warm-up done at this step.
 
