@@ -4,6 +4,7 @@ README's generated blocks (numbers are never typed by hand).
     python benchmarks/summarize.py              # results.md + README blocks from the committed JSON
     python benchmarks/summarize.py --snapshot   # first copy the demo's report JSON (after `make demo`)
                                                 # into benchmarks/results/demo/
+    python benchmarks/summarize.py --snapshot-converged converged   # after `make converged`
     python benchmarks/summarize.py --check      # exit 1 if results.md or the README are stale
 
 Inputs: ``benchmarks/results/bench_*.json`` (written by each benchmark) and
@@ -27,6 +28,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 DEMO = RESULTS / "demo"
+CONVERGED = RESULTS / "converged"
 SUMMARY = ROOT / "benchmarks" / "results.md"
 README = ROOT / "README.md"
 
@@ -42,6 +44,16 @@ DEMO_SOURCES = {
     "dictaphone.json": "reports/dictaphone/metrics.json",
     "simulate.json": "reports/simulate/metrics.json",
     "study.json": "reports/study/readability/metrics.json",
+}
+# outputs of `make converged` copied by --snapshot-converged: snapshot name -> path under its root
+CONVERGED_SOURCES = {
+    "models_cvae.json": "models/cvae/metrics.json",
+    "models_avae_ts.json": "models/avae_ts/metrics.json",
+    "models_avae_ti.json": "models/avae_ti/metrics.json",
+    "models_muse.json": "models/muse/metrics.json",
+    "classifiers.json": "models/classifiers/metrics.json",
+    "evaluate.json": "reports/metrics.json",
+    "run.json": "reports/paper_scale.json",
 }
 FAMILIES = {
     "cvae": "PRG_CVAE(T,S)",
@@ -92,7 +104,7 @@ def _prepare(d: dict) -> list[Row]:
 
 def _train(d: dict) -> list[Row]:
     target = d["settings"]["target_ratio"]
-    return [
+    rows = [
         Row(
             f"training throughput, {family} (batch {f['batch_size']})",
             f"{f['lightning_samples_per_s']:,.0f} samples/s",
@@ -103,6 +115,50 @@ def _train(d: dict) -> list[Row]:
         )
         for family, f in d["families"].items()
     ]
+    techniques = d.get("techniques")
+    if techniques:
+        reference = techniques["techniques"][techniques["reference"]]
+        rows += [
+            Row(
+                f"MUSE training throughput, {name}",
+                f"{t['samples_per_s']:,.0f} samples/s",
+                f"plain loop, {techniques['reference']}",
+                f"{reference['samples_per_s']:,.0f} samples/s",
+                t["samples_per_s"] / reference["samples_per_s"],
+                "> 1",
+            )
+            for name, t in techniques["techniques"].items()
+            if name != techniques["reference"]
+        ]
+    quality = d.get("time_to_quality")
+    if quality:
+        ours, paper = quality["ours"], quality["paper"]
+
+        def said(run: dict, level: str) -> str:
+            minutes = run["cpu_min_to"].get(level)
+            if minutes is not None:
+                return f"{minutes:.1f} CPU min"
+            return f"not reached in {run['cpu_min_spent']:.1f} CPU min"
+
+        for level in map(str, quality["levels"]):
+            speedup = quality["speedup"].get(level)
+            if speedup is None and float(level) != quality["target"]:
+                continue  # a lower level ours did not reach either: nothing to compare
+            ratio = math.nan if speedup is None else 1 / speedup["ratio"]
+            bound = " (paper's run capped: ratio is an upper bound)"
+            rows.append(
+                Row(
+                    f"CPU time to MUSE T-from-S coherence {level} (folded), "
+                    f"experiment={ours['profile']}"
+                    + (bound if speedup and speedup["lower_bound"] else ""),
+                    said(ours, level),
+                    "the paper's recipe (Adam 1e-4, batch 64, fp32)",
+                    said(paper, level),
+                    ratio,
+                    "<= 0.2",
+                )
+            )
+    return rows
 
 
 def _evaluate(d: dict) -> list[Row]:
@@ -259,6 +315,8 @@ def benchmark_rows(results: Path = RESULTS) -> dict[str, list[Row]]:
 
 
 def _ratio(value: float) -> str:
+    if math.isnan(value):
+        return "-"
     if not math.isfinite(value):
         return str(value)
     if value == 0 or 0.01 <= abs(value) < 1000:
@@ -336,10 +394,36 @@ def snapshot(root: Path = ROOT, demo: Path = DEMO) -> None:
     _write_file(demo / "provenance.json", json.dumps(provenance, indent=2, sort_keys=True) + "\n")
 
 
+def snapshot_converged(source: Path, converged: Path = CONVERGED) -> None:
+    """Copy the metrics of a finished ``make converged`` (its ``--root``) into ``converged``."""
+    run = read_json(source / CONVERGED_SOURCES["run.json"])
+    if run.get("status") != "ok" or run.get("profile") != "converged":
+        raise SummaryError(
+            f"{source / CONVERGED_SOURCES['run.json']}: not a finished converged run "
+            f"(profile {run.get('profile')!r}, status {run.get('status')!r})"
+        )
+    converged.mkdir(parents=True, exist_ok=True)
+    for name, relative in CONVERGED_SOURCES.items():
+        read_json(source / relative)
+        tmp = converged / f".{name}.tmp"
+        shutil.copyfile(source / relative, tmp)
+        os.replace(tmp, converged / name)
+
+
 TABLE1_CELLS = ["T", "S", "I", "T_given_S", "T_given_I", "S_given_T", "I_given_T"]
 TRAJ_CELLS = [c for c in TABLE1_CELLS if c.startswith("T")]  # trajectory targets
 MODEL_STD = "_model_std"  # prg.evaluation.likelihood.MODEL_STD_SUFFIX
-COHERENCE_CELLS = ["T_given_S", "T_given_I", "I_given_T", "S_given_T", "T_given_TS"]
+COHERENCE_CELLS = [
+    "T_given_S",
+    "T_given_I",
+    "T_given_SI",
+    "I_given_T",
+    "S_given_T",
+    "I_given_S",
+    "T_given_T",
+]
+# trajectory coherence from every subset of inputs (missing-modality robustness)
+ROBUSTNESS_SUBSETS = ["S", "I", "SI", "T", "TS", "TI", "TSI"]
 ROUGHNESS_CELLS = ["T_given_S", "T_given_I"]
 TEST_ROUGHNESS = "test_split/roughness"
 
@@ -438,12 +522,31 @@ def coherence_markdown(evaluate: dict) -> str:
             for f in FAMILIES
         ],
     )
+    robustness = _table(
+        ["model", *(f"{{{','.join(subset)}}}" for subset in ROBUSTNESS_SUBSETS)],
+        [
+            [
+                FAMILIES[f],
+                *(
+                    _number(evaluate, f"{f}/coherence_folded_T_given_{subset}", ".0%")
+                    for subset in ROBUSTNESS_SUBSETS
+                ),
+            ]
+            for f in FAMILIES
+        ],
+    )
     return "\n".join(
         [
             "**Cross-modal coherence** (the generated modality classified as the given label; "
             "exact / with shape twins such as o/O/0 counted right):",
             "",
             coherence,
+            "",
+            "**Missing-modality robustness**: trajectory coherence (folded) from each subset of "
+            "inputs a model accepts ('-' where it cannot take it; subsets with T are "
+            "reconstructions):",
+            "",
+            robustness,
             "",
             "**Smoothness**: roughness ratio of the letters decoded from labels or images "
             "(posterior mean): their median roughness over the test letters' median roughness "
@@ -509,6 +612,47 @@ def demo_markdown(demo: Path = DEMO) -> str:
     return "\n".join(lines)
 
 
+def _minutes(seconds: float) -> str:
+    return f"{seconds / 60:.1f} min"
+
+
+def converged_markdown(converged: Path = CONVERGED) -> str:
+    """Tables of the converged profile's models (``make converged``), or a line saying how."""
+    if not (converged / "run.json").is_file():
+        return (
+            "No converged snapshot yet: `make converged`, then "
+            "`python benchmarks/summarize.py --snapshot-converged converged`."
+        )
+    d = {name: read_json(converged / name) for name in CONVERGED_SOURCES}
+    run, evaluate = d["run.json"], d["evaluate.json"]
+    models = {family: d[f"models_{family}.json"] for family in FAMILIES}
+    settings, stages = run["settings"], run["stages"]
+    fit = stages["train"].get("fit", {})
+    costs = ", ".join(
+        f"{FAMILIES[f]} {_minutes(fit[f]['fit_cpu_s'])} CPU ({fit[f]['epochs']:.0f} epochs)"
+        for f in FAMILIES
+        if f in fit
+    )
+    n_likelihood = settings.get("n_test_likelihood") or "all"
+    n_test = settings.get("n_test") or "all"
+    return "\n".join(
+        [
+            f"`{run['command']}` on {run['device']} ({run['cpu_count']} cores): "
+            f"{_minutes(run['total_seconds'])} wall in all; training "
+            f"{_minutes(stages['train']['seconds'])} wall for the four families and the "
+            f"classifiers as concurrent processes; fit CPU time (all threads) per family: "
+            f"{costs}; evaluation {_minutes(stages['evaluate']['seconds'])} wall at "
+            f"K = {settings['k_marginal']} / {settings['k_conditional']} on {n_likelihood} test "
+            f"samples for Table I and {n_test} for coherence and robustness. Coherence "
+            f"classifiers {_accuracy_text(d['classifiers.json'])}.",
+            "",
+            table1_markdown(evaluate, models),
+            "",
+            coherence_markdown(evaluate),
+        ]
+    )
+
+
 def _accuracy_text(classifiers: dict) -> str:
     return "test accuracy " + ", ".join(
         f"{name} {classifiers[name]['test_accuracy']:.1%}" for name in ("traj", "image")
@@ -524,7 +668,9 @@ def _write_file(path: Path, text: str) -> None:
     os.replace(tmp, path)
 
 
-def results_markdown(results: Path = RESULTS, demo: Path = DEMO) -> str:
+def results_markdown(
+    results: Path = RESULTS, demo: Path = DEMO, converged: Path = CONVERGED
+) -> str:
     return (
         "# Benchmark results\n\n"
         "Generated by `python benchmarks/summarize.py` (run by `make bench`); do not edit.\n\n"
@@ -533,6 +679,10 @@ def results_markdown(results: Path = RESULTS, demo: Path = DEMO) -> str:
         + "`make demo` (quick profile, synthetic data), from the snapshot in "
         + "`benchmarks/results/demo/`.\n\n"
         + demo_markdown(demo)
+        + "\n\n## The converged profile\n\n"
+        + "`make converged` (`experiment=converged`, synthetic data), from the snapshot in "
+        + "`benchmarks/results/converged/`.\n\n"
+        + converged_markdown(converged)
         + "\n"
     )
 
@@ -546,19 +696,30 @@ def fill_block(text: str, name: str, content: str) -> str:
     return text[: start + len(begin)] + "\n" + content + "\n" + text[stop:]
 
 
-def readme_text(readme: str, results: Path = RESULTS, demo: Path = DEMO) -> str:
+def readme_text(
+    readme: str, results: Path = RESULTS, demo: Path = DEMO, converged: Path = CONVERGED
+) -> str:
     readme = fill_block(readme, "benchmarks", benchmarks_markdown(results))
-    return fill_block(readme, "demo", demo_markdown(demo))
+    readme = fill_block(readme, "demo", demo_markdown(demo))
+    return fill_block(readme, "converged", converged_markdown(converged))
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--snapshot", action="store_true", help="copy the demo's metrics first")
+    parser.add_argument(
+        "--snapshot-converged",
+        type=Path,
+        metavar="ROOT",
+        help="copy the metrics of a finished `make converged` under ROOT first",
+    )
     parser.add_argument("--check", action="store_true", help="exit 1 if any output is stale")
     args = parser.parse_args(argv)
     try:
         if args.snapshot:
             snapshot()
+        if args.snapshot_converged:
+            snapshot_converged(args.snapshot_converged)
         outputs = {
             SUMMARY: results_markdown(),
             README: readme_text(README.read_text()),

@@ -121,3 +121,21 @@ def test_clean_text_normalises_spaces_and_skips_on_request(text, on_unknown, exp
 def test_clean_text_lists_every_unknown_character():
     with pytest.raises(UsageError, match=r"'ç', '\?'"):
         clean_text("ça va?")
+
+
+@pytest.mark.parametrize(
+    "read, meant",
+    [
+        ("jumP", "jump"),  # P/p: the same shape once size is normalised away
+        ("sPOT", "SPOT"),
+        ("Cat", "cat"),  # a and t are small
+        ("oX Vw", "oX Vw"),  # only twins: no evidence either way
+        ("Ab", "Ab"),  # a tie: left as read
+        ("0pen", "0pen"),  # a digit keeps its class
+        ("Hi xYz", "Hi XYZ"),  # word by word
+    ],
+)
+def test_case_twins_take_the_case_of_their_word(read, meant):
+    from prg.pipeline.generate import case_from_context
+
+    assert case_from_context(read) == meant

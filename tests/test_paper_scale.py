@@ -200,3 +200,47 @@ def test_a_failed_training_stops_the_others_and_fails_with_one_line(tmp_path, sm
     assert timings["status"].startswith("failed: train: cvae failed")
     assert "evaluate" not in timings["stages"]
     assert set(timings["stages"]["train"]["jobs"]) == {"cvae", "muse", "classifiers"}
+
+
+def test_the_converged_profile_trains_the_fast_recipe_into_its_own_folder(tmp_path, small_dataset):
+    result = _run(
+        tmp_path,
+        *TINY,
+        "--data-dir",
+        str(small_dataset),
+        "--profile",
+        "converged",
+        "--families",
+        "cvae,muse",
+        "--n-test-likelihood",
+        "5",
+    )
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr
+    assert "Profile converged done in " in result.stdout
+    root = tmp_path / "converged"
+    timings = json.loads((root / "reports/paper_scale.json").read_text())
+    assert timings["profile"] == "converged" and timings["status"] == "ok"
+    settings = timings["settings"]
+    assert settings["precision"] == "bf16-mixed"  # the fast recipe, not the paper's
+    assert settings["lr"] == {"cvae": 0.002, "muse": 0.002}
+    assert settings["batch_size"] == {"cvae": 128, "muse": 128}
+    fit = timings["stages"]["train"]["fit"]
+    assert set(fit) == {"cvae", "muse"}
+    for family, cost in fit.items():
+        metrics = json.loads((root / "models" / family / "metrics.json").read_text())
+        assert cost["fit_cpu_s"] == metrics["fit_cpu_s"] > 0
+        assert cost["steps"] == metrics["steps"] == 2  # --limit-train-batches 2, one epoch
+    rows = list(csv.DictReader((root / "reports/table1.csv").open()))
+    assert {int(r["n_test"]) for r in rows} == {5}  # Table I on 5 samples ...
+    n_test = len(np.load(small_dataset / "prepared/synthetic/test.npz")["label"])
+    coherence = list(csv.DictReader((root / "reports/coherence.csv").open()))
+    assert {int(r["n"]) for r in coherence} == {n_test}  # ... coherence on all of them
+    client = MlflowClient(sqlite_uri(tmp_path / "mlruns.db"))
+    runs = client.search_runs([client.get_experiment_by_name("prg-converged").experiment_id])
+    assert sorted(r.info.run_name for r in runs) == [
+        "converged-evaluate",
+        "cvae-seed0",
+        "muse-seed0",
+    ]
+    assert all(r.data.tags.get("prg.experiment") == "converged" for r in runs)
+    assert not (tmp_path / "paper").exists()

@@ -2,6 +2,7 @@
 
 import importlib.util
 import json
+import math
 import shutil
 import sys
 from pathlib import Path
@@ -27,7 +28,10 @@ def test_every_benchmark_json_gives_rows_with_a_reference_and_a_finite_ratio():
         assert items, name
         for row in items:
             assert row.reference and row.reference_value and row.ours
-            assert row.ratio > 0 and row.ratio < float("inf"), (name, row)
+            if row.ours.startswith("not reached"):  # no time of ours to compare
+                assert math.isnan(row.ratio), (name, row)
+            else:
+                assert row.ratio > 0 and row.ratio < float("inf"), (name, row)
 
 
 def test_a_changed_measurement_changes_the_table(tmp_path):
@@ -132,3 +136,101 @@ def test_an_old_snapshot_shows_its_trajectory_cells_only_under_the_models_own_st
     assert _row(text, OWN, "PRG_AVAE(T,S)")[0] == "206.2"
     assert "predates the unit-variance table" in text.split(OWN)[0]
     assert _row(text, COHERENCE, "PRG_AVAE(T,S)")[0] == "70% / -"
+
+
+def test_speed_techniques_and_time_to_quality_become_rows_against_their_references(tmp_path):
+    results = tmp_path / "results"
+    shutil.copytree(summarize.RESULTS, results)
+    data = json.loads((results / "bench_train.json").read_text())
+    data["techniques"] = {
+        "family": "muse",
+        "reference": "fp32, batch 64 (paper)",
+        "techniques": {
+            "fp32, batch 64 (paper)": {"samples_per_s": 400.0},
+            "batch 128 + bf16 autocast": {"samples_per_s": 1000.0},
+        },
+    }
+    ours = {"profile": "quick", "cpu_min_to": {"0.6": 2.0, "0.7": 6.0}, "cpu_min_spent": 9.0}
+    paper = {"profile": "paper", "cpu_min_to": {"0.6": 20.0}, "cpu_min_spent": 30.0}
+    data["time_to_quality"] = {
+        "target": 0.85,
+        "levels": [0.6, 0.7, 0.8, 0.85],
+        "ours": ours,
+        "paper": paper,
+        "speedup": {
+            "0.6": {"ratio": 10.0, "lower_bound": False},
+            "0.7": {"ratio": 5.0, "lower_bound": True},
+        },
+    }
+    (results / "bench_train.json").write_text(json.dumps(data))
+    rows = summarize.benchmark_rows(results)["bench_train"]
+    (bf16,) = [r for r in rows if "bf16" in r.figure]
+    assert (bf16.ours, bf16.reference_value, bf16.ratio) == (
+        "1,000 samples/s",
+        "400 samples/s",
+        2.5,
+    )
+    quality = {r.figure.split()[6]: r for r in rows if r.figure.startswith("CPU time to MUSE")}
+    assert list(quality) == ["0.6", "0.7", "0.85"]  # 0.8: reached by neither
+    assert (quality["0.6"].ours, quality["0.6"].reference_value) == ("2.0 CPU min", "20.0 CPU min")
+    assert quality["0.6"].ratio == pytest.approx(0.1) and "upper bound" not in quality["0.6"].figure
+    assert quality["0.7"].reference_value == "not reached in 30.0 CPU min"
+    assert quality["0.7"].ratio == pytest.approx(0.2) and "upper bound" in quality["0.7"].figure
+    assert quality["0.85"].ours == "not reached in 9.0 CPU min"
+    assert math.isnan(quality["0.85"].ratio) and summarize._ratio(quality["0.85"].ratio) == "-"
+
+
+def _converged_root(tmp_path, status: str = "ok") -> Path:
+    root = tmp_path / "converged"
+    for name, relative in summarize.CONVERGED_SOURCES.items():
+        if name == "run.json":
+            continue
+        (root / relative).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(summarize.DEMO / name, root / relative)
+    fit = {"fit_cpu_s": 600.0, "fit_wall_s": 400.0, "epochs": 7.0, "steps": 3800.0}
+    run = {
+        "status": status,
+        "profile": "converged",
+        "command": "python -m prg.paper_scale --profile converged --device auto",
+        "device": "a test CPU",
+        "cpu_count": 2,
+        "total_seconds": 3000.0,
+        "settings": {
+            "k_marginal": 1000,
+            "k_conditional": 5000,
+            "n_test": None,
+            "n_test_likelihood": 100,
+        },
+        "stages": {
+            "train": {"seconds": 1800.0, "fit": {"muse": fit}},
+            "evaluate": {"seconds": 1200.0},
+        },
+    }
+    (root / "reports/paper_scale.json").write_text(json.dumps(run))
+    return root
+
+
+def test_the_converged_snapshot_shows_its_command_costs_and_tables(tmp_path):
+    out = tmp_path / "snapshot"
+    assert "No converged snapshot yet" in summarize.converged_markdown(out)
+    summarize.snapshot_converged(_converged_root(tmp_path), out)
+    text = summarize.converged_markdown(out)
+    assert "`python -m prg.paper_scale --profile converged --device auto`" in text
+    assert "PRG_MUSE(T,S,I) 10.0 min CPU (7 epochs)" in text
+    assert "on 100 test samples for Table I and all for coherence" in text
+    assert TABLE1 in text and COHERENCE in text and "**Missing-modality robustness**" in text
+
+
+def test_an_unfinished_converged_run_is_not_snapshotted(tmp_path):
+    with pytest.raises(summarize.SummaryError, match="not a finished converged run"):
+        summarize.snapshot_converged(_converged_root(tmp_path, "failed: x"), tmp_path / "s")
+    assert not (tmp_path / "s").exists()
+
+
+def test_robustness_shows_folded_trajectory_coherence_for_each_input_subset(tmp_path):
+    text = _demo_with(
+        tmp_path,
+        {"muse/coherence_folded_T_given_SI": 0.91, "muse/coherence_folded_T_given_TSI": 0.97},
+    )
+    robustness = _row(text, "**Missing-modality robustness**", "PRG_MUSE(T,S,I)")
+    assert robustness == ["-", "-", "91%", "-", "-", "-", "97%"]

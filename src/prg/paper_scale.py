@@ -709,7 +709,9 @@ def _fit_costs(root: Path, families: list[str]) -> dict[str, dict[str, float]]:
         path = root / "models" / family / "metrics.json"
         if path.is_file():
             metrics = json.loads(path.read_text())
-            out[family] = {k: metrics.get(k) for k in ("fit_cpu_s", "fit_wall_s", "epochs", "steps")}
+            out[family] = {
+                k: metrics.get(k) for k in ("fit_cpu_s", "fit_wall_s", "epochs", "steps")
+            }
     return out
 
 

@@ -175,7 +175,28 @@ def infer_text(model: MultimodalVAE, inputs: dict[str, torch.Tensor]) -> str:
     chosen = usable_inputs(model, inputs)
     with torch.no_grad():
         probs = model.generate(chosen, "label")[0]
-    return "".join(label_to_char(int(i)) for i in probs.argmax(-1))
+    return case_from_context("".join(label_to_char(int(i)) for i in probs.argmax(-1)))
+
+
+# Letters whose capital and small forms are the same shape: a letter image or trajectory is
+# normalised for size and position, so nothing in it tells P from p.
+CASE_TWINS = frozenset("CcOoPpSsVvWwXxZz")
+
+
+def case_from_context(text: str) -> str:
+    """Give each case-twin letter (``CASE_TWINS``) of every word the case most of that word's
+    other letters have, as a reader would: "jumP" -> "jump", "sPOT" -> "SPOT". A word without a
+    majority (a tie, or only twins and digits) is left as read."""
+    words = []
+    for word in text.split(" "):
+        cased = [c for c in word if c.isalpha() and c not in CASE_TWINS]
+        upper = sum(c.isupper() for c in cased)
+        lower = len(cased) - upper
+        if upper != lower:
+            fix = str.upper if upper > lower else str.lower
+            word = "".join(fix(c) if c in CASE_TWINS else c for c in word)
+        words.append(word)
+    return " ".join(words)
 
 
 def check_inputs(text: str, inputs: dict[str, torch.Tensor]) -> None:
