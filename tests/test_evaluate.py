@@ -103,9 +103,11 @@ def test_reports_tables_figures_and_mlflow(trained_root, small_dataset):
             alone = estimate_cell(model, target, given, data, k, 64, 4096, cfg.seed, False, lik)
             assert by_key[(family, key)] == pytest.approx(alone.mean().item(), abs=1e-3)
 
-    # coherence: every subset x target x kind; MUSE has 7 subsets and 3 targets
+    # coherence: every subset x target x kind; MUSE has 7 subsets and 3 targets, and the
+    # imputed kind beside the mean and sampled ones (only it imputes)
     muse = [r for r in result.coherence if r["model"] == "muse"]
-    assert len(muse) == 7 * 3 * 2
+    assert len(muse) == 7 * 3 * 3
+    assert {r["model"] for r in result.coherence if r["kind"] == "imputed"} == {"muse"}
     assert all(0.0 <= r["coherence"] <= r["coherence_folded"] <= 1.0 for r in result.coherence)
     with open(reports / "coherence.csv") as f:
         coherence_csv = list(csv.DictReader(f))
@@ -143,6 +145,14 @@ def test_reports_tables_figures_and_mlflow(trained_root, small_dataset):
     assert metrics["muse/coherence_folded_T_given_S"] == pytest.approx(
         np.mean(FOLD[predicted] == FOLD[labels]), abs=1e-3
     )
+    steps = cfg.coherence.impute_steps
+    muse_s_imputed = models["muse"].generate({"label": test["label"]}, "traj", impute_steps=steps)[
+        0
+    ]
+    imputed = predict(classifier, muse_s_imputed).numpy()
+    assert metrics["muse/coherence_folded_imputed_T_given_S"] == pytest.approx(
+        np.mean(FOLD[imputed] == FOLD[labels]), abs=1e-3
+    )
 
     # roughness of decoded letters over the test letters' (posterior mean, whole test split)
     reference = median_roughness(test["traj"].numpy())
@@ -161,7 +171,12 @@ def test_reports_tables_figures_and_mlflow(trained_root, small_dataset):
         "avae_ti/roughness_ratio_T_given_I",
         "muse/roughness_ratio_T_given_S",
         "muse/roughness_ratio_T_given_I",
+        "muse/roughness_ratio_imputed_T_given_S",
+        "muse/roughness_ratio_imputed_T_given_I",
     }
+    assert metrics["muse/roughness_ratio_imputed_T_given_S"] == pytest.approx(
+        median_roughness(muse_s_imputed.numpy()) / reference, rel=1e-3
+    )
     client = MlflowClient(sqlite_uri(trained_root / "mlruns.db"))
     run_id = json.loads((trained_root / "models/muse/metrics.json").read_text())["mlflow_run_id"]
     logged = client.get_run(run_id).data.metrics

@@ -643,3 +643,36 @@ def test_fast_dev_run_on_the_prepared_dataset(family, small_dataset):
     for split in ("train", "val"):
         assert torch.isfinite(metrics[f"{split}/loss"]), split
     assert {k for k in metrics if k.startswith("train/")} == {f"train/{t}" for t in TERMS[family]}
+
+
+def test_imputing_moves_a_label_posterior_and_only_muse_imputes():
+    torch.manual_seed(0)
+    muse = MUSE().eval()
+    labels = torch.arange(5)
+    with torch.no_grad():
+        plain = muse.encode({"label": labels})
+        assert torch.equal(muse.encode_imputed({"label": labels}, 0).mu, plain.mu)
+        once = muse.encode_imputed({"label": labels}, 1)
+        # by hand: decode the missing trajectory and image from the plain mean, encode them,
+        # fuse them with the label's expert
+        traj = muse.decode(plain.mu, "traj")
+        image = muse.decode(plain.mu, "image").sigmoid()
+        codes = {
+            "label": muse.encoders["label"](labels)[0],
+            "traj": muse.encoders["traj"](traj)[0],
+            "image": muse.encoders["image"](image)[0],
+        }
+        expected = muse.top_posterior(codes)
+        assert torch.allclose(once.mu, expected.mu, atol=1e-5)
+        assert not torch.allclose(once.mu, plain.mu)
+        generated = muse.generate({"label": labels}, "traj", impute_steps=1)[0]
+        assert torch.allclose(generated, muse.decode(once.mu, "traj"), atol=1e-5)
+    assert MUSE.imputes_missing and not AVAE(("traj", "label")).imputes_missing
+    avae = AVAE(("traj", "label")).eval()
+    assert torch.equal(
+        avae.generate({"label": labels}, "traj", impute_steps=3),
+        avae.generate({"label": labels}, "traj"),
+    )
+    for bad in (-1, 1.5, True):
+        with pytest.raises(UsageError, match="impute_steps must be an integer >= 0"):
+            muse.generate({"label": labels}, "traj", impute_steps=bad)

@@ -152,10 +152,12 @@ def dictaphone(cfg: DictConfig) -> dict[str, Any]:
                         _save_png(image, folder / f"{i}_{word[i]}.png")
                     inputs = {"image": image_inputs(folder)}
                     text = word
-                    perceived = _read(model, inputs)
+                    perceived = _read(model, inputs, params.impute_steps)
                     figure_inputs[word, channel] = images_of_word
                 check_inputs(text, inputs)
-                letters = decode_letters(model, inputs, params.temperature, params.seed)
+                letters = decode_letters(
+                    model, inputs, params.temperature, params.seed, params.impute_steps
+                )
                 written, rollout = compose_word(letters, text, params)
                 seconds = time.perf_counter() - start
                 images = inputs.get("image")
@@ -212,9 +214,9 @@ def dictaphone(cfg: DictConfig) -> dict[str, Any]:
     return metrics
 
 
-def _read(model, inputs) -> str:
+def _read(model, inputs, impute_steps: int) -> str:
     try:
-        return infer_text(model, inputs)
+        return infer_text(model, inputs, impute_steps)
     except UsageError:  # the family does not generate labels
         return ""
 

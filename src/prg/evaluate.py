@@ -18,8 +18,10 @@ targets under a Gaussian of std ``likelihood.traj_std`` (default 1.0, the paper'
 ``logp_T_model_std``, ``logp_T_given_S_model_std`` ... under the model's own std, from the same
 importance samples; coherence ``coherence_T_given_S`` (exact class) and
 ``coherence_folded_T_given_S`` (shape twins such as o/O/0 counted right), ``_sampled_`` for the
-temperature-1 kind; ``roughness_ratio_T_given_S`` / ``_T_given_I`` (decoded letters' median
-roughness over the test letters', whose median is ``test_split/roughness``).
+temperature-1 kind, ``_imputed_`` for MUSE's posterior mean after ``coherence.impute_steps``
+rounds of imputing the missing modalities (``coherence_folded_imputed_T_given_S``);
+``roughness_ratio_T_given_S`` / ``_T_given_I`` (decoded letters' median roughness over the test
+letters', whose median is ``test_split/roughness``; ``roughness_ratio_imputed_T_given_S`` ...).
 """
 
 from __future__ import annotations
@@ -93,6 +95,8 @@ COHERENCE_COLUMNS = (
 # Inputs from which decoded letters are scored for roughness: each single non-trajectory
 # modality a model accepts (labels: cvae, avae_ts, muse; images: avae_ti, muse).
 ROUGHNESS_INPUTS = (("label",), ("image",))
+# The generation kind of samples decoded after imputing the missing modalities (MUSE).
+IMPUTED = "imputed"
 TEST_ROUGHNESS_KEY = "test_split/roughness"
 
 
@@ -134,6 +138,11 @@ def _check_config(cfg: DictConfig) -> list[str]:
     for kind, value in cfg.coherence.temperatures.items():
         if not _is_number(value, integer=False, minimum=0):
             raise UsageError(f"coherence.temperatures.{kind} must be a number >= 0, got {value!r}")
+    if IMPUTED in cfg.coherence.temperatures:
+        raise UsageError(f"coherence.temperatures: {IMPUTED!r} names the imputed kind; rename it")
+    steps = cfg.coherence.get("impute_steps", 0)
+    if not _is_number(steps, integer=True, minimum=0):
+        raise UsageError(f"coherence.impute_steps must be an integer >= 0, got {steps!r}")
     return parts
 
 
@@ -266,23 +275,43 @@ def likelihood_rows(models, test: dict[str, torch.Tensor], cfg: DictConfig) -> l
     return rows
 
 
+def generation_kinds(model, cfg: DictConfig) -> list[tuple[str, float, int]]:
+    """(kind, temperature, impute steps) of each way ``model``'s samples are generated: the
+    configured temperatures, and ``imputed`` (posterior mean after ``coherence.impute_steps``
+    rounds of imputing the missing modalities, as the generation stage decodes) for families
+    that impute."""
+    kinds = [(kind, float(t), 0) for kind, t in cfg.coherence.temperatures.items()]
+    steps = cfg.coherence.get("impute_steps", 0)
+    if model.imputes_missing and steps:
+        kinds.append((IMPUTED, 0.0, int(steps)))
+    return kinds
+
+
 def coherence_rows(
     models, classifiers, test: dict[str, torch.Tensor], cfg: DictConfig
 ) -> tuple[list[dict], dict]:
     """Rows per (model, target, subset, kind), and per-class rates for the figures."""
     data = _subset(test, cfg.n_test, cfg.seed)
     jobs = [
-        (name, model, target, given, kind, float(temperature))
+        (name, model, target, given, kind, temperature, steps)
         for name, (model, _, _) in models.items()
         for target, given in coherence_cells(model)
-        for kind, temperature in cfg.coherence.temperatures.items()
+        for kind, temperature, steps in generation_kinds(model, cfg)
     ]
     rows, per_class = [], {}
-    for name, model, target, given, kind, temperature in _progress(
+    for name, model, target, given, kind, temperature, steps in _progress(
         jobs, "coherence cells", cfg.progress
     ):
         predicted = generated_classes(
-            model, target, given, data, classifiers, temperature, cfg.coherence.batch_size, cfg.seed
+            model,
+            target,
+            given,
+            data,
+            classifiers,
+            temperature,
+            cfg.coherence.batch_size,
+            cfg.seed,
+            steps,
         )
         correct = predicted == data["label"]
         rows.append(
@@ -314,33 +343,40 @@ def roughness_rows(models, test: dict[str, torch.Tensor], cfg: DictConfig) -> li
     for name, (model, _, _) in models.items():
         if "traj" not in model.generated_modalities:
             continue
+        means = [(k, steps) for k, t, steps in generation_kinds(model, cfg) if t == 0]
         for given in ROUGHNESS_INPUTS:
             if given not in model.accepted_inputs:
                 continue
-            decoded = generated_samples(
-                model, "traj", given, data, 0.0, cfg.coherence.batch_size, cfg.seed
-            ).numpy()
-            median = median_roughness(decoded)
-            rows.append(
-                {
-                    "model": name,
-                    "family": model.family,
-                    "target": "traj",
-                    "given": subset_name(given),
-                    "roughness": median,
-                    "reference": reference,
-                    "ratio": median / reference if reference > 0 else math.nan,
-                    "n": len(decoded),
-                }
-            )
-            log.info(
-                "%s roughness T from %s: %.3f (ratio %.2f)",
-                name,
-                subset_name(given),
-                median,
-                rows[-1]["ratio"],
-            )
+            for kind, steps in means:
+                rows.append(_roughness_row(name, model, given, kind, steps, data, reference, cfg))
     return rows
+
+
+def _roughness_row(name, model, given, kind, steps, data, reference, cfg) -> dict:
+    decoded = generated_samples(
+        model, "traj", given, data, 0.0, cfg.coherence.batch_size, cfg.seed, steps
+    ).numpy()
+    median = median_roughness(decoded)
+    row = {
+        "model": name,
+        "family": model.family,
+        "target": "traj",
+        "given": subset_name(given),
+        "kind": kind,
+        "roughness": median,
+        "reference": reference,
+        "ratio": median / reference if reference > 0 else math.nan,
+        "n": len(decoded),
+    }
+    log.info(
+        "%s roughness T from %s (%s): %.3f (ratio %.2f)",
+        name,
+        subset_name(given),
+        kind,
+        median,
+        row["ratio"],
+    )
+    return row
 
 
 # ---- outputs ---------------------------------------------------------------------------------
@@ -371,7 +407,9 @@ def metrics_of(result: Evaluation) -> dict[str, Any]:
             row["coherence_folded"], 4
         )
     for row in result.smoothness:
-        key = f"roughness_ratio_{LETTER[row['target']]}_given_{row['given'].replace(',', '')}"
+        kind = "" if row.get("kind", "mean") == "mean" else f"{row['kind']}_"
+        given = row["given"].replace(",", "")
+        key = f"roughness_ratio_{kind}{LETTER[row['target']]}_given_{given}"
         if _finite(row["ratio"]):
             metrics[f"{row['model']}/{key}"] = round(row["ratio"], 4)
     if result.smoothness and _finite(result.smoothness[0]["reference"]):

@@ -178,10 +178,10 @@ def write(cfg: DictConfig) -> tuple[WordTrajectory, Path]:
         inputs["traj"] = trajectory_inputs(cfg.trajectories)
     start = time.perf_counter()
     if text is None:
-        text = infer_text(model, inputs)
+        text = infer_text(model, inputs, params.impute_steps)
         log.info("read %r from the images", text)
     check_inputs(text, inputs)
-    letters = decode_letters(model, inputs, params.temperature, params.seed)
+    letters = decode_letters(model, inputs, params.temperature, params.seed, params.impute_steps)
     word, path = compose_word(letters, text, params)
     seconds = time.perf_counter() - start
     recording = None

@@ -41,11 +41,12 @@ def generated_classes(
     temperature: float = 0.0,
     batch_size: int = 512,
     seed: int = 0,
+    impute_steps: int = 0,
 ) -> torch.Tensor:
     """Class assigned to each generated ``target`` sample (shape (N,), long)."""
     out = torch.empty(len(data["label"]), dtype=torch.long)
     for rows, generated in _generated_batches(
-        model, target, given, data, temperature, batch_size, seed
+        model, target, given, data, temperature, batch_size, seed, impute_steps
     ):
         out[rows] = (
             generated.argmax(-1) if target == "label" else predict(classifiers[target], generated)
@@ -62,6 +63,7 @@ def generated_samples(
     temperature: float = 0.0,
     batch_size: int = 512,
     seed: int = 0,
+    impute_steps: int = 0,
 ) -> torch.Tensor:
     """One generated ``target`` sample per test sample (shape (N, ...)), drawn as
     :func:`generated_classes` draws them."""
@@ -69,19 +71,23 @@ def generated_samples(
         [
             g
             for _, g in _generated_batches(
-                model, target, given, data, temperature, batch_size, seed
+                model, target, given, data, temperature, batch_size, seed, impute_steps
             )
         ]
     )
 
 
-def _generated_batches(model, target, given, data, temperature, batch_size, seed):
+def _generated_batches(model, target, given, data, temperature, batch_size, seed, impute_steps):
     torch.manual_seed(seed)  # generate() draws latents from the global generator
     n = len(data["label"])
     for start in range(0, n, batch_size):
         rows = slice(start, start + batch_size)
         generated = model.generate(
-            {m: data[m][rows] for m in given}, target, n=1, temperature=temperature
+            {m: data[m][rows] for m in given},
+            target,
+            n=1,
+            temperature=temperature,
+            impute_steps=impute_steps,
         )[0]
         yield rows, generated
 

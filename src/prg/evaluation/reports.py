@@ -238,7 +238,8 @@ def smoothness_markdown(rows: list[dict]) -> list[str]:
     body = [
         [
             _row_title(r["model"], r["family"]),
-            f"{LETTER[r['target']]} given {{{r['given']}}}",
+            f"{LETTER[r['target']]} given {{{r['given']}}}"
+            + ("" if r.get("kind", "mean") == "mean" else f" ({r['kind']})"),
             f"{r['roughness']:.3f}",
             f"{r['ratio']:.2f}",
         ]

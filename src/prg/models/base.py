@@ -149,9 +149,24 @@ class MultimodalVAE(nn.Module, ABC):
                 f"it accepts {accepted}"
             )
 
+    #: Whether :meth:`encode_imputed` differs from :meth:`encode` (a joint posterior that
+    #: imputed modalities can join).
+    imputes_missing: bool = False
+
+    def encode_imputed(self, inputs: Inputs, steps: int) -> Gaussian:
+        """The posterior after ``steps`` rounds of imputing the modalities missing from
+        ``inputs`` (see :meth:`prg.models.muse.MUSE.encode_imputed`). Families whose posterior
+        does not combine modalities have nothing to impute: their plain :meth:`encode`."""
+        return self.encode(inputs)
+
     @torch.no_grad()
     def generate(
-        self, inputs: Inputs, target: str, n: int = 1, temperature: float = 0.0
+        self,
+        inputs: Inputs,
+        target: str,
+        n: int = 1,
+        temperature: float = 0.0,
+        impute_steps: int = 0,
     ) -> torch.Tensor:
         """Data-space outputs of ``target`` from ``inputs``.
 
@@ -166,6 +181,9 @@ class MultimodalVAE(nn.Module, ABC):
         temperature : float
             0 decodes the posterior mean (every sample equal); otherwise latents are drawn with
             their standard deviation scaled by ``temperature``.
+        impute_steps : int
+            0 (the paper): the posterior of ``inputs`` alone; k > 0: the posterior after k
+            rounds of imputing the missing modalities (:meth:`encode_imputed`).
 
         Returns
         -------
@@ -178,7 +196,11 @@ class MultimodalVAE(nn.Module, ABC):
                 f"{self.family} cannot generate {target!r}: it generates "
                 f"{list(self.generated_modalities)}"
             )
-        posterior = self.encode(inputs)
+        if isinstance(impute_steps, bool) or not isinstance(impute_steps, int) or impute_steps < 0:
+            raise UsageError(f"impute_steps must be an integer >= 0, got {impute_steps!r}")
+        posterior = (
+            self.encode_imputed(inputs, impute_steps) if impute_steps else self.encode(inputs)
+        )
         z = (
             posterior.mu.expand(n, *posterior.mu.shape)
             if temperature == 0

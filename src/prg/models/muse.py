@@ -113,6 +113,33 @@ class MUSE(MultimodalVAE):
         """x_m parameters from the top latent c: g_m(d_m(c))."""
         return self.decoders[modality](self.top_decoders[modality](z))
 
+    imputes_missing = True
+
+    def encode_imputed(self, inputs: Inputs, steps: int) -> Gaussian:
+        """q(c | x_G, x^_M) after ``steps`` rounds of imputing the missing modalities M.
+
+        q(c | x_G) from a subset G is broad: one label must cover every style of its letter, so
+        its mean sits between the styles, and decoding it gives a blend that can read as
+        another letter. Each round decodes the missing modalities from the current posterior
+        mean (trajectory and pixel means, the most likely label), encodes them with their own
+        bottom encoders and fuses them with the given ones: a deterministic form of the
+        encoder-decoder imputation chain of Rezende, Mohamed & Wierstra (2014, sec. 5). The
+        given modalities keep their experts in every round, so the posterior moves toward one
+        style of what was given. ``steps=0`` is :meth:`encode`."""
+        self.check_inputs(inputs)
+        given = {m: self.encoders[m](inputs[m])[0] for m in self.modalities if m in inputs}
+        missing = [m for m in self.modalities if m not in inputs]
+        posterior = self.top_posterior(given)
+        for _ in range(steps):
+            codes = dict(given)
+            for m in missing:
+                imputed = self.likelihoods.mean(m, self.decode(posterior.mu, m))
+                if m == "label":
+                    imputed = imputed.argmax(-1)
+                codes[m] = self.encoders[m](imputed)[0]
+            posterior = self.top_posterior(codes)
+        return posterior
+
     # ---- training -----------------------------------------------------------------------
     def elbo(self, batch: Inputs) -> dict[str, torch.Tensor]:
         terms: dict[str, torch.Tensor] = {}

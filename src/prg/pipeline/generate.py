@@ -38,6 +38,10 @@ class GenerateParams:
 
     temperature : 0 decodes each letter's posterior mean; > 0 draws latents with their std
         scaled by it (variety), reproducibly for ``seed``.
+    impute_steps : rounds of imputing the modalities a letter was not given before decoding
+        (:meth:`prg.models.muse.MUSE.encode_imputed`; families without a joint posterior ignore
+        it). 0 is the paper's decoding. The demo MUSE's letters from labels read right (folded
+        coherence, whole test split) 0.68 with 0 rounds, 0.89 with 10, 0.94 with 20.
     method : ``"alg1"`` (the paper's connection algorithm) or ``"straight"``.
     speed_cm_s : mean pen speed over the word; ``ramp_s`` : start/stop ramp duration.
     samples_per_s : DMP demonstration samples per second of writing.
@@ -50,6 +54,7 @@ class GenerateParams:
 
     temperature: float = 0.0
     seed: int = 0
+    impute_steps: int = 20
     method: str = "alg1"
     speed_cm_s: float = DEFAULT_SPEED_CM_S
     ramp_s: float = 0.3
@@ -85,7 +90,11 @@ def usable_inputs(model: MultimodalVAE, inputs: dict[str, torch.Tensor]) -> dict
 
 @torch.no_grad()
 def decode_letters(
-    model: MultimodalVAE, inputs: dict[str, torch.Tensor], temperature: float = 0.0, seed: int = 0
+    model: MultimodalVAE,
+    inputs: dict[str, torch.Tensor],
+    temperature: float = 0.0,
+    seed: int = 0,
+    impute_steps: int = 0,
 ) -> np.ndarray:
     """One generated trajectory per letter.
 
@@ -95,7 +104,7 @@ def decode_letters(
     inputs : dict
         Per-letter model inputs, each with N rows (``label`` (N,), ``traj`` (N, 200), ``image``
         (N, 1, 28, 28)).
-    temperature, seed : see :class:`GenerateParams`.
+    temperature, seed, impute_steps : see :class:`GenerateParams`.
 
     Returns
     -------
@@ -105,7 +114,9 @@ def decode_letters(
     chosen = usable_inputs(model, inputs)
     with torch.random.fork_rng(devices=[]):
         torch.manual_seed(seed)
-        out = model.generate(chosen, "traj", n=1, temperature=temperature)[0]
+        out = model.generate(
+            chosen, "traj", n=1, temperature=temperature, impute_steps=impute_steps
+        )[0]
     return out.numpy().reshape(len(out), -1, 2).astype(np.float64)
 
 
@@ -165,7 +176,7 @@ def _ramped_distance(t: np.ndarray, duration: float, ramp: float) -> np.ndarray:
     )
 
 
-def infer_text(model: MultimodalVAE, inputs: dict[str, torch.Tensor]) -> str:
+def infer_text(model: MultimodalVAE, inputs: dict[str, torch.Tensor], impute_steps: int = 0) -> str:
     """The letters the model reads from the inputs (S given the inputs), for a word given without
     its text (e.g. images only): the layout needs each letter's class."""
     if "label" not in model.generated_modalities:
@@ -174,7 +185,7 @@ def infer_text(model: MultimodalVAE, inputs: dict[str, torch.Tensor]) -> str:
         )
     chosen = usable_inputs(model, inputs)
     with torch.no_grad():
-        probs = model.generate(chosen, "label")[0]
+        probs = model.generate(chosen, "label", impute_steps=impute_steps)[0]
     return case_from_context("".join(label_to_char(int(i)) for i in probs.argmax(-1)))
 
 
@@ -240,7 +251,7 @@ def write_word(
     """
     params = params or GenerateParams()
     check_inputs(text, inputs)
-    trajs = decode_letters(model, inputs, params.temperature, params.seed)
+    trajs = decode_letters(model, inputs, params.temperature, params.seed, params.impute_steps)
     return compose_word(trajs, text, params)
 
 
