@@ -224,7 +224,7 @@ def test_the_converged_profile_trains_the_fast_recipe_into_its_own_folder(tmp_pa
     assert settings["precision"] == "bf16-mixed"  # the fast recipe, not the paper's
     assert settings["lr"] == {"cvae": 0.002, "muse": 0.002}
     assert settings["batch_size"] == {"cvae": 128, "muse": 128}
-    fit = timings["stages"]["train"]["fit"]
+    fit = timings["fit"]
     assert set(fit) == {"cvae", "muse"}
     for family, cost in fit.items():
         metrics = json.loads((root / "models" / family / "metrics.json").read_text())

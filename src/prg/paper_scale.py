@@ -589,6 +589,7 @@ def run(args: argparse.Namespace, console: Console) -> dict[str, Any]:
     begin = time.perf_counter()
     try:
         _stages(args, root, data_dir, accelerator, timings, console)
+        timings["fit"] = _fit_costs(root, args.families)  # also the models --skip-train reuses
         _tag_evaluate_run(eval_cfg, args.profile)
         timings["status"] = "ok"
     except (PRGError, _Stopped) as err:
@@ -679,7 +680,6 @@ def _stages(
             stages["train"] = {
                 "seconds": round(time.perf_counter() - begin, 2),
                 "jobs": {j.name: j.seconds for j in jobs if j.started},
-                "fit": _fit_costs(root, trainings),
             }
 
     evaluate = [
