@@ -156,8 +156,11 @@ TECHNIQUES = {  # name -> (batch size, bf16 autocast, channels-last images, torc
 }
 
 
-def run_technique(module_cfg: dict, train: dict, technique: tuple, n: int, warmup: int) -> float:
-    """Samples per second of a plain MUSE loop over ``n`` batches drawn from ``train``."""
+def run_technique(
+    module_cfg: dict, train: dict, technique: tuple, n: int, warmup: int
+) -> tuple[float, float]:
+    """(samples per second, mean loss of the timed batches) of a plain MUSE loop over ``n``
+    batches drawn from ``train``: the loss shows whether a technique changes what is learnt."""
     batch_size, bf16, channels_last, compiled = technique
     torch.manual_seed(0)
     model = instantiate(module_cfg["model"], _convert_="all")
@@ -166,7 +169,7 @@ def run_technique(module_cfg: dict, train: dict, technique: tuple, n: int, warmu
     opt = instantiate(module_cfg["optimizer"])(params=model.parameters())
     elbo = torch.compile(model.elbo) if compiled else model.elbo
     order = torch.randperm(len(train["label"]), generator=torch.Generator().manual_seed(0))
-    start = None
+    start, losses = None, []
     for i in range(warmup + n):
         rows = order[i * batch_size : (i + 1) * batch_size]
         batch = {k: v[rows] for k, v in train.items()}
@@ -179,7 +182,9 @@ def run_technique(module_cfg: dict, train: dict, technique: tuple, n: int, warmu
         opt.step()
         if i == warmup - 1:
             start = time.perf_counter()
-    return n * batch_size / (time.perf_counter() - start)
+        elif i >= warmup:
+            losses.append(loss.item())
+    return n * batch_size / (time.perf_counter() - start), statistics.fmean(losses)
 
 
 def techniques_part(data_dir: Path, args) -> dict:
@@ -194,25 +199,31 @@ def techniques_part(data_dir: Path, args) -> dict:
     cfg = family_config("muse")
     names = [t for t in TECHNIQUES if args.compile or not TECHNIQUES[t][3]]
     speeds: dict[str, list[float]] = {t: [] for t in names}
+    losses: dict[str, float] = {}
     for _ in range(args.reps):  # alternate the techniques so drifts in load hit all of them
         for name in names:
-            speeds[name].append(
-                run_technique(cfg["module"], train, TECHNIQUES[name], args.batches, args.warmup)
+            speed, losses[name] = run_technique(
+                cfg["module"], train, TECHNIQUES[name], args.batches, args.warmup
             )
-            print(f"  {name}: {speeds[name][-1]:.0f} samples/s", flush=True)
+            speeds[name].append(speed)
+            print(f"  {name}: {speed:.0f} samples/s, loss {losses[name]:.1f}", flush=True)
     reference = statistics.median(speeds[names[0]])
     rows = {
         name: {
             "samples_per_s": round(statistics.median(v), 1),
             "runs": [round(x, 1) for x in v],
             "ratio": round(statistics.median(v) / reference, 3),
+            "mean_loss_timed_batches": round(losses[name], 2),
         }
         for name, v in speeds.items()
     }
     print(f"\nMUSE training throughput by technique ({args.threads} thread(s), plain loop)")
-    print(f"{'technique':<36}{'samples/s':>11}{'ratio':>8}")
+    print(f"{'technique':<36}{'samples/s':>11}{'ratio':>8}{'loss':>9}")
     for name, r in rows.items():
-        print(f"{name:<36}{r['samples_per_s']:>11.0f}{r['ratio']:>8.2f}")
+        print(
+            f"{name:<36}{r['samples_per_s']:>11.0f}{r['ratio']:>8.2f}"
+            f"{r['mean_loss_timed_batches']:>9.1f}"
+        )
     return {"family": "muse", "reference": names[0], "techniques": rows}
 
 

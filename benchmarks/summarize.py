@@ -656,7 +656,7 @@ def converged_markdown(converged: Path = CONVERGED) -> str:
     n_test = settings.get("n_test") or "all"
     return "\n".join(
         [
-            f"`{run['command']}` on {run['device']} ({run['cpu_count']} cores): "
+            f"`{run['command']}` on {run['device']}: "
             f"{_minutes(run['total_seconds'])} wall in all"
             + (
                 f"; training {_minutes(stages['train']['seconds'])} wall for the four families "
