@@ -55,7 +55,7 @@ demo: setup ## Run the whole pipeline (dvc repro): data, models, evaluation, Tab
 paper: setup ## Paper scale on one GPU: the 4 families (experiment=paper) at once, then K=1000/5000 -> paper/
 	$(BIN)/python -m prg.paper_scale $(PAPER_ARGS)
 
-# The whole split at K=1000/5000 takes ~3 h on 2 CPU cores (image cells): Table I on 100 test
+# The whole split at K=1000/5000 takes ~70 min on 2 CPU cores (image cells): Table I on 100 test
 # samples by default, coherence and robustness on the whole split; CONVERGED_ARGS= for all of it.
 CONVERGED_ARGS ?= --n-test-likelihood 100
 converged: setup ## Converged profile on this machine: the 4 families (experiment=converged), then K=1000/5000 -> converged/
