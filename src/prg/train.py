@@ -200,7 +200,8 @@ def _train(cfg: DictConfig) -> TrainResult:
     )
     trainer: L.Trainer = _build(cfg.trainer, "trainer", logger=logger, callbacks=callbacks)
     cpu_start, wall_start = time.process_time(), time.perf_counter()
-    trainer.fit(module, datamodule=datamodule, ckpt_path=ckpt_path)
+    # weights_only: a resumed checkpoint is data, as read_checkpoint already checked it
+    trainer.fit(module, datamodule=datamodule, ckpt_path=ckpt_path, weights_only=True)
     # the cost of this fit (a resumed run counts only its own part): CPU time of all threads
     metrics = {k: float(v) for k, v in trainer.callback_metrics.items()}
     metrics["fit_cpu_s"] = time.process_time() - cpu_start

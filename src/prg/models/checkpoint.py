@@ -1,8 +1,17 @@
-"""Reading training checkpoints: the raw dict (for resuming) or the model ready to use."""
+"""Reading training checkpoints: the raw dict (for resuming) or the model ready to use.
+
+A checkpoint is data, never code: it is unpickled with ``torch.load(weights_only=True)`` (tensors,
+numbers, strings and containers only: what our checkpoints hold), and the classes its
+hyper-parameters ask to instantiate (``_target_``) must be the project's models or PyTorch's
+optimizers and learning-rate schedulers. Anything else is refused with one line before any of it
+is built."""
 
 from __future__ import annotations
 
+import importlib
 import os
+import pickle
+import re
 from pathlib import Path
 from typing import Any
 
@@ -20,14 +29,69 @@ def read_checkpoint(path: str | os.PathLike) -> dict[str, Any]:
     if not path.is_file():
         raise UsageError(f"checkpoint {path} does not exist")
     try:
-        ckpt = torch.load(path, map_location="cpu", weights_only=False)
+        ckpt = torch.load(path, map_location="cpu", weights_only=True)
+    except pickle.UnpicklingError as err:
+        found = re.search(r"GLOBAL ([\w.]+)", str(err))  # the class or function it names
+        if found is None:  # not a pickle of ours at all
+            raise UsageError(
+                f"checkpoint {path} is not a readable checkpoint (UnpicklingError)"
+            ) from None
+        raise UsageError(
+            f"checkpoint {path} refused: it holds a {found.group(1)} object, not only tensors "
+            "and plain data (loading it could run code)"
+        ) from None
     except Exception as err:  # torch raises many types for a file that is not a checkpoint
         raise UsageError(
             f"checkpoint {path} is not a readable checkpoint ({type(err).__name__})"
         ) from None
     if not isinstance(ckpt, dict) or "state_dict" not in ckpt or "hyper_parameters" not in ckpt:
         raise UsageError(f"checkpoint {path} is not a prg training checkpoint")
+    check_targets(ckpt["hyper_parameters"], path)
     return ckpt
+
+
+# What a checkpoint's hyper-parameters may instantiate: (module prefix, required base class).
+ALLOWED_TARGETS = (
+    ("prg.models.", "torch.nn.Module"),
+    ("torch.optim.lr_scheduler.", "torch.optim.lr_scheduler.LRScheduler"),
+    ("torch.optim.", "torch.optim.Optimizer"),
+)
+
+
+def _resolve(dotted: str) -> Any:
+    module, _, name = dotted.rpartition(".")
+    return getattr(importlib.import_module(module), name)
+
+
+def check_targets(hparams: Any, path: str | os.PathLike) -> None:
+    """Raise a UsageError unless every ``_target_`` in ``hparams`` names one of the project's
+    model classes or a PyTorch optimizer or scheduler class (:data:`ALLOWED_TARGETS`)."""
+    stack = [hparams]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, dict):
+            stack.extend(node.values())
+            target = node.get("_target_")
+            if target is not None and not _allowed(target):
+                raise UsageError(
+                    f"checkpoint {path} refused: it asks to build {target!r}; a checkpoint may "
+                    f"name only prg's models and torch's optimizers and schedulers"
+                )
+        elif isinstance(node, (list, tuple)):
+            stack.extend(node)
+
+
+def _allowed(target: Any) -> bool:
+    if not isinstance(target, str):
+        return False
+    for prefix, base in ALLOWED_TARGETS:
+        if target.startswith(prefix):
+            try:
+                cls = _resolve(target)
+            except (ImportError, AttributeError, ValueError):
+                return False
+            return isinstance(cls, type) and issubclass(cls, _resolve(base))
+    return False
 
 
 def load_model(path: str | os.PathLike) -> tuple[MultimodalVAE, dict[str, Any]]:
