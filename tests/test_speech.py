@@ -521,3 +521,20 @@ def test_pocketsphinx_lexicon_word_missing_from_the_dictionary(speech):
     params = SpeechParams(backend="pocketsphinx", lexicon=("bell", "zorbleflux"))
     with pytest.raises(UsageError, match="lexicon words 'zorbleflux' are not in the pocketsphinx"):
         recognise(speech["bell"], params)
+
+
+def test_a_wav2vec2_folder_with_pickled_weights_only_is_refused(tmp_path, wav2vec2_model):
+    """A pytorch_model.bin is a pickle (loading one could run code): safetensors only."""
+    import shutil
+
+    import torch
+    from transformers import Wav2Vec2ForCTC
+
+    folder = tmp_path / "pickled"
+    shutil.copytree(wav2vec2_model, folder)
+    network = Wav2Vec2ForCTC.from_pretrained(str(folder), local_files_only=True)
+    (folder / "model.safetensors").unlink()
+    torch.save(network.state_dict(), folder / "pytorch_model.bin")  # the legacy pickled format
+    assert (folder / "pytorch_model.bin").is_file() and not (folder / "model.safetensors").exists()
+    with pytest.raises(UsageError, match="neither a local model folder"):
+        get_recogniser("wav2vec2", str(folder))

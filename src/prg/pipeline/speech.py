@@ -687,7 +687,10 @@ class Wav2Vec2Recogniser:
         source = str(path) if path.is_dir() else model
         try:
             self.processor = AutoProcessor.from_pretrained(source, local_files_only=True)
-            self.network = Wav2Vec2ForCTC.from_pretrained(source, local_files_only=True).eval()
+            # safetensors only: a pickled pytorch_model.bin could run code when loaded
+            self.network = Wav2Vec2ForCTC.from_pretrained(
+                source, local_files_only=True, use_safetensors=True
+            ).eval()
         except (OSError, ValueError) as err:
             raise UsageError(
                 f"wav2vec2 model {model!r} is neither a local model folder nor in the local "
