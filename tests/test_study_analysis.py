@@ -366,3 +366,62 @@ def test_h2_threshold_separates_rejecting_from_non_rejecting_participant_means()
             .reject
             == rejects
         )
+
+
+@pytest.mark.parametrize("k", [0, 7])  # a word nobody / everybody got: real outcomes
+def test_boundary_rates_get_intervals_that_contain_them(k):
+    from studies.analysis.report import fig_turing_words
+    from studies.analysis.stats import proportion_ci, rates_by
+
+    rows = [{"word": "all", "chose_robot": int(i < k)} for i in range(7)]
+    rows += [{"word": "some", "chose_robot": int(i < 3)} for i in range(7)]
+    per_word = rates_by(pd.DataFrame(rows), "chose_robot", "word", chance=0.2)
+    edge = per_word.set_index("word").loc["all"]
+    assert edge["rate"] == k / 7
+    assert edge["ci_low"] <= edge["rate"] <= edge["ci_high"]
+    assert (edge["ci_low"], edge["ci_high"])[k == 7] == k / 7  # the bound is the rate itself
+    # away from the boundary the interval is statsmodels' own
+    assert proportion_ci(3, 7) == pytest.approx(proportion_confint(3, 7, method="wilson"))
+    fig = fig_turing_words(per_word, chance=0.2, margin=0.1, overall=None)  # no negative bars
+    assert fig is not None
+
+
+def test_a_study_where_almost_every_word_was_spotted_by_everyone_analyses(tmp_path):
+    """Simulated at a 0.999 rate, 9 of 10 words reach 100 %: the report is written, exit 0
+    (the per-word figure used to fail on a negative error bar)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    study = str(root / "conf/study/turing.yaml")
+    responses = tmp_path / "turing.csv"
+
+    def run(*args: str) -> subprocess.CompletedProcess:
+        code = "import sys; from studies.cli import main; sys.exit(main())"
+        return subprocess.run(
+            [sys.executable, "-c", code, *args], capture_output=True, text=True, timeout=300
+        )
+
+    made = run(
+        "simulate",
+        "turing",
+        "--participants",
+        "20",
+        "--true-rate",
+        "0.999",
+        "--icc",
+        "0",
+        "--seed",
+        "1",
+        "--study",
+        study,
+        "--out",
+        str(responses),
+    )
+    assert made.returncode == 0, made.stderr
+    rates = pd.read_csv(responses).groupby("word")["chose_robot"].mean()
+    assert (rates == 1.0).sum() >= 5  # boundary words are really there
+    result = run("analyze", str(responses), "--study", study, "--out", str(tmp_path / "report"))
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert (tmp_path / "report" / "report.html").is_file()

@@ -307,7 +307,7 @@ def fig_confidence(data: pd.DataFrame, neutral: float):
 
 def fig_readability(per_word: pd.DataFrame, data: pd.DataFrame):
     """Success rate per writer (Wilson CI) and per word, human vs robot."""
-    from statsmodels.stats.proportion import proportion_confint
+    from studies.analysis.stats import proportion_ci
 
     plt = _plt()
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.6), gridspec_kw={"width_ratios": [1, 2.2]})
@@ -317,7 +317,7 @@ def fig_readability(per_word: pd.DataFrame, data: pd.DataFrame):
         if len(y) == 0:
             continue
         k, n = int(y.sum()), len(y)
-        lo, hi = proportion_confint(k, n, method="wilson")
+        lo, hi = proportion_ci(k, n)
         a1.errorbar(
             [i],
             [k / n],

@@ -102,6 +102,23 @@ def _fmt_p(p: float) -> str:
 # --------------------------------------------------------------------------- paper-faithful
 
 
+def proportion_ci(k, n, alpha: float = 0.05, method: str = "wilson"):
+    """``statsmodels``' ``proportion_confint``, with each interval made to contain its rate k/n.
+
+    At k = n (k = 0) the Wilson and exact bounds are 1 (0) in exact arithmetic, but statsmodels
+    returns them with round-off (1 - 1e-16), which puts the rate outside its own interval and
+    gives a negative error bar: a word every participant got right is a real outcome."""
+    from statsmodels.stats.proportion import proportion_confint
+
+    k_arr, n_arr = np.asarray(k, dtype=float), np.asarray(n, dtype=float)
+    lo, hi = proportion_confint(k_arr, n_arr, alpha=alpha, method=method)
+    rate = k_arr / n_arr
+    lo, hi = np.minimum(lo, rate), np.maximum(hi, rate)
+    if np.ndim(k) == 0:
+        return float(lo), float(hi)
+    return lo, hi
+
+
 def binomial_test(
     df: pd.DataFrame,
     outcome: str = "chose_robot",
@@ -167,13 +184,11 @@ def proportion_intervals(
     DataFrame
         Columns method, k, n, rate, ci_low, ci_high, ci_level.
     """
-    from statsmodels.stats.proportion import proportion_confint
-
     y = _binary(df, outcome)
     k, n = int(y.sum()), len(y)
     rows = []
     for m in methods:
-        lo, hi = proportion_confint(k, n, alpha=alpha, method=m)
+        lo, hi = proportion_ci(k, n, alpha=alpha, method=m)
         rows.append(dict(method=m, k=k, n=n, rate=k / n, ci_low=lo, ci_high=hi, ci_level=1 - alpha))
     return pd.DataFrame(rows)
 
@@ -407,7 +422,6 @@ def rates_by(
         Columns ``*by``, n, k, rate, ci_low, ci_high, ci_level (and p_vs_chance, p_holm).
     """
     from statsmodels.stats.multitest import multipletests
-    from statsmodels.stats.proportion import proportion_confint
 
     keys = [by] if isinstance(by, str) else list(by)
     frame = df.assign(_y=_values(df, outcome)).dropna(subset=["_y"])
@@ -415,9 +429,7 @@ def rates_by(
     out = pd.DataFrame({"n": g.size(), "k": g.sum()}).reset_index()
     out["k"] = out["k"].astype(int)
     out["rate"] = out["k"] / out["n"]
-    lo, hi = proportion_confint(
-        out["k"].to_numpy(), out["n"].to_numpy(), alpha=alpha, method="wilson"
-    )
+    lo, hi = proportion_ci(out["k"].to_numpy(), out["n"].to_numpy(), alpha=alpha)
     out["ci_low"], out["ci_high"], out["ci_level"] = lo, hi, 1 - alpha
     if chance is not None:
         p = [stats.binomtest(int(k), int(n), chance).pvalue for k, n in zip(out["k"], out["n"])]
