@@ -122,17 +122,11 @@ def run_plain(module_cfg: dict, loader, warmup: int, n: int, seed: int) -> float
     raise RuntimeError(f"the loader ran out before {warmup + n} batches")
 
 
-def run_lightning(module_cfg: dict, loader, warmup: int, n: int, seed: int) -> tuple[float, float]:
-    """(seconds for the ``n`` timed batches, wall seconds of the whole ``fit`` incl. set-up)."""
-    torch.manual_seed(seed)
-    module_cfg = {k: v for k, v in module_cfg.items() if k != "_target_"}
-    module = PRGModule(**module_cfg)
-    clock = StepClock(warmup, n)
-    trainer = L.Trainer(
+def bare_trainer(clock: L.Callback, **settings) -> L.Trainer:
+    """A CPU Trainer that only trains: no validation, logger, checkpoints, bar or summary."""
+    return L.Trainer(
         accelerator="cpu",
         devices=1,
-        max_steps=warmup + n,
-        max_epochs=-1,
         limit_val_batches=0,
         num_sanity_val_steps=0,
         logger=False,
@@ -140,7 +134,17 @@ def run_lightning(module_cfg: dict, loader, warmup: int, n: int, seed: int) -> t
         enable_progress_bar=False,
         enable_model_summary=False,
         callbacks=[clock],
+        **settings,
     )
+
+
+def run_lightning(module_cfg: dict, loader, warmup: int, n: int, seed: int) -> tuple[float, float]:
+    """(seconds for the ``n`` timed batches, wall seconds of the whole ``fit`` incl. set-up)."""
+    torch.manual_seed(seed)
+    module_cfg = {k: v for k, v in module_cfg.items() if k != "_target_"}
+    module = PRGModule(**module_cfg)
+    clock = StepClock(warmup, n)
+    trainer = bare_trainer(clock, max_steps=warmup + n, max_epochs=-1)
     t0 = time.perf_counter()
     trainer.fit(module, train_dataloaders=loader)
     return clock.seconds, time.perf_counter() - t0
@@ -302,19 +306,11 @@ def run_to_quality(profile: str, data_dir: Path, clock: QualityClock, tmp: str) 
     cfg = compose_config("train", ["model=muse", f"experiment={profile}"])
     module = PRGModule(**{k: v for k, v in cfg.model.module.items() if k != "_target_"})
     dm = PRGDataModule(data_dir, "synthetic", list(cfg.model.modalities), cfg.model.batch_size)
-    trainer = L.Trainer(
-        accelerator="cpu",
-        devices=1,
+    trainer = bare_trainer(
+        clock,
         precision=cfg.trainer.precision,
         max_epochs=cfg.trainer.max_epochs,
         limit_train_batches=cfg.trainer.limit_train_batches,
-        limit_val_batches=0,
-        num_sanity_val_steps=0,
-        logger=False,
-        enable_checkpointing=False,
-        enable_progress_bar=False,
-        enable_model_summary=False,
-        callbacks=[clock],
         default_root_dir=tmp,
     )
     trainer.fit(module, datamodule=dm)

@@ -32,29 +32,25 @@ CONVERGED = RESULTS / "converged"
 SUMMARY = ROOT / "benchmarks" / "results.md"
 README = ROOT / "README.md"
 
-# DVC outputs copied by --snapshot: snapshot name -> path in the repository after `make demo`
-DEMO_SOURCES = {
-    "prepare.json": "reports/prepare/synthetic/metrics.json",
+# each model's and the classifiers' metrics, relative to the folder that holds ``models/``
+MODEL_SOURCES = {
     "models_cvae.json": "models/cvae/metrics.json",
     "models_avae_ts.json": "models/avae_ts/metrics.json",
     "models_avae_ti.json": "models/avae_ti/metrics.json",
     "models_muse.json": "models/muse/metrics.json",
     "classifiers.json": "models/classifiers/metrics.json",
     "evaluate.json": "reports/metrics.json",
+}
+# DVC outputs copied by --snapshot: snapshot name -> path in the repository after `make demo`
+DEMO_SOURCES = {
+    "prepare.json": "reports/prepare/synthetic/metrics.json",
+    **MODEL_SOURCES,
     "dictaphone.json": "reports/dictaphone/metrics.json",
     "simulate.json": "reports/simulate/metrics.json",
     "study.json": "reports/study/readability/metrics.json",
 }
 # outputs of `make converged` copied by --snapshot-converged: snapshot name -> path under its root
-CONVERGED_SOURCES = {
-    "models_cvae.json": "models/cvae/metrics.json",
-    "models_avae_ts.json": "models/avae_ts/metrics.json",
-    "models_avae_ti.json": "models/avae_ti/metrics.json",
-    "models_muse.json": "models/muse/metrics.json",
-    "classifiers.json": "models/classifiers/metrics.json",
-    "evaluate.json": "reports/metrics.json",
-    "run.json": "reports/paper_scale.json",
-}
+CONVERGED_SOURCES = {**MODEL_SOURCES, "run.json": "reports/paper_scale.json"}
 FAMILIES = {
     "cvae": "PRG_CVAE(T,S)",
     "avae_ts": "PRG_AVAE(T,S)",
@@ -366,6 +362,14 @@ def benchmarks_markdown(results: Path = RESULTS) -> str:
 # ---------------------------------------------------------------- demo reports
 
 
+def _copy_json(source: Path, target: Path) -> None:
+    """Copy a JSON file that reads as JSON, through a temporary name."""
+    read_json(source)
+    tmp = target.with_name(f".{target.name}.tmp")
+    shutil.copyfile(source, tmp)
+    os.replace(tmp, target)
+
+
 def snapshot(root: Path = ROOT, demo: Path = DEMO) -> None:
     """Copy the demo pipeline's metrics JSON into ``demo`` with their ``dvc.lock`` hashes."""
     import yaml
@@ -379,11 +383,7 @@ def snapshot(root: Path = ROOT, demo: Path = DEMO) -> None:
     demo.mkdir(parents=True, exist_ok=True)
     provenance = {}
     for name, source in DEMO_SOURCES.items():
-        path = root / source
-        read_json(path)
-        tmp = demo / f".{name}.tmp"
-        shutil.copyfile(path, tmp)
-        os.replace(tmp, demo / name)
+        _copy_json(root / source, demo / name)
         # the lock entry of the file itself, or of the output folder holding it
         owner = max(
             (out for out in hashes if source == out or source.startswith(out + "/")),
@@ -404,10 +404,7 @@ def snapshot_converged(source: Path, converged: Path = CONVERGED) -> None:
         )
     converged.mkdir(parents=True, exist_ok=True)
     for name, relative in CONVERGED_SOURCES.items():
-        read_json(source / relative)
-        tmp = converged / f".{name}.tmp"
-        shutil.copyfile(source / relative, tmp)
-        os.replace(tmp, converged / name)
+        _copy_json(source / relative, converged / name)
 
 
 TABLE1_CELLS = ["T", "S", "I", "T_given_S", "T_given_I", "S_given_T", "I_given_T"]
