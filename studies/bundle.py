@@ -24,7 +24,6 @@ import csv
 import hashlib
 import io
 import json
-import os
 import shutil
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -32,6 +31,7 @@ from importlib import resources
 from pathlib import Path
 
 import prg
+from prg.atomic import staged_folder
 from studies.design import ROBOT, Row, StudyConfig, balance_notes, design_rows
 from studies.stimuli import (
     HumanSamples,
@@ -242,19 +242,8 @@ def build_study(
     say = progress or (lambda line: None)
     style = RenderStyle.from_dict(config.render)
     out = Path(out_dir) if out_dir is not None else Path("studies") / config.name / "build"
-    out.parent.mkdir(parents=True, exist_ok=True)
-    staging = out.parent / f".{out.name}.tmp-{os.getpid()}"
-    shutil.rmtree(staging, ignore_errors=True)
-    staging.mkdir()
-    try:
+    with staged_folder(out) as staging:
         report = _build_into(staging, config, style, human_dirs, robot_dir, ckpt, say, pilot)
-        old = out.parent / f".{out.name}.old-{os.getpid()}"
-        if out.exists():
-            os.replace(out, old)
-        os.replace(staging, out)
-        shutil.rmtree(old, ignore_errors=True)
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
     report.out_dir = out
     return report
 

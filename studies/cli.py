@@ -20,7 +20,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import NoReturn
 
-from prg.cli import check_output, os_error_message
+from prg.cli import check_output, handle_signals, os_error_message
 from prg.errors import PRGError, UsageError
 
 PROG = "prg-study"
@@ -153,7 +153,13 @@ def make_parser() -> Parser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run ``prg-study``; returns the exit code."""
+    """Run ``prg-study``; returns the exit code (a signal exits with 128 + its number, see
+    :func:`prg.cli.handle_signals`)."""
+    with handle_signals(PROG):
+        return _main(argv)
+
+
+def _main(argv: Sequence[str] | None) -> int:
     parser = make_parser()
     args = parser.parse_args(argv)
     if getattr(args, "func", None) is None:
@@ -169,9 +175,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         print(f"{PROG}: error: {message}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        print(f"{PROG}: error: interrupted; nothing was written", file=sys.stderr)
-        return 130
 
 
 def _choices(parser: argparse.ArgumentParser) -> list[str]:

@@ -30,6 +30,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
+from urllib.parse import urlsplit
 
 import numpy as np
 import yaml
@@ -59,6 +60,19 @@ DEFAULT_INSTRUCTIONS = {
 }
 CONFIDENCE_LABELS = ("very low", "low", "neutral", "high", "very high")
 PROLIFIC_URL = "https://app.prolific.com/submissions/complete?cc={code}"
+
+# Limits of a study file: beyond them a build takes minutes and gigabytes, or the page breaks.
+MAX_PARTICIPANTS = 10_000
+MAX_WORDS = 200
+MAX_WORD_LENGTH = 30
+MAX_HUMAN_WRITERS = 100
+MAX_FOILS = 9  #: at most 10 samples on one screen
+MAX_TRIALS = 200_000  #: participants x trials each, all in trials.json (about 4 s to design)
+MAX_SEED = 2**32 - 1
+MAX_REDIRECT_DELAY_MS = 60_000
+CANVAS_PX = (50, 4000)  #: capture page canvas, CSS pixels
+CODE_RE = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
+URL_SCHEMES = ("http", "https")
 
 
 # ---------------------------------------------------------------------------- configuration
@@ -176,6 +190,18 @@ _SECTIONS = {
     "save": {"download": True, "post_url": None},
     "capture": {"on_lift": "restart", "post_url": None, "canvas_width": 900, "canvas_height": 300},
 }
+#: Sections without defaults: the keys they accept (render: studies.stimuli.RenderStyle's).
+_FREE_SECTIONS = {"page": ("title", "consent", "instructions", "confidence_labels")}
+#: Keys of the ``analysis`` section (see studies.analysis.config).
+ANALYSIS_KEYS = (
+    "alpha",
+    "chance",
+    "equivalence_margin",
+    "exclude_failed_attention",
+    "margin_source",
+    "n_options",
+    "neutral",
+)
 _TOP = {
     "name",
     "kind",
@@ -193,11 +219,129 @@ _TOP = {
 }
 
 
-def _int(doc: Mapping, key: str, default: int | None, minimum: int) -> int:
+def _int(
+    doc: Mapping, key: str, default: int | None, minimum: int, maximum: int | None = None
+) -> int:
     value = doc.get(key, default)
-    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-        raise UsageError(f"{key} must be an integer >= {minimum}, got {value!r}")
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, int)
+        or value < minimum
+        or (maximum is not None and value > maximum)
+    ):
+        accepted = f">= {minimum}" if maximum is None else f"from {minimum} to {maximum}"
+        raise UsageError(f"{key} must be an integer {accepted}, got {value!r}")
     return value
+
+
+def _url(value: Any, key: str, *, code: bool = False) -> str | None:
+    """An ``http(s)://host/...`` URL or None; with ``code``, one holding ``{code}``."""
+    if value is None:
+        return None
+    accepted = "an http:// or https:// URL" + (" holding {code}" if code else "") + " or null"
+    try:
+        parts = urlsplit(value.strip()) if isinstance(value, str) else None
+    except ValueError:
+        parts = None
+    if (
+        parts is None
+        or parts.scheme.lower() not in URL_SCHEMES
+        or not parts.hostname
+        or any(ch.isspace() or not ch.isprintable() for ch in value.strip())
+    ):
+        raise UsageError(f"{key} must be {accepted}, got {value!r}")
+    if code and "{code}" not in value:
+        raise UsageError(
+            f"{key} {value!r} has no {{code}} placeholder for the completion code: accepted is "
+            f"{accepted}, e.g. {PROLIFIC_URL}"
+        )
+    return value.strip()
+
+
+def _section(key: str, value: Any, defaults: dict) -> dict:
+    """A section's settings over its defaults; an unknown key is named."""
+    if not isinstance(value, Mapping):
+        raise UsageError(f"{key} must be a mapping of settings, got {value!r}")
+    known = set(defaults) if defaults else set(_FREE_SECTIONS.get(key, ()))
+    unknown = sorted(set(value) - known) if known else []
+    if unknown:
+        raise UsageError(
+            f"{key}: unknown key {unknown[0]!r}: accepted are {', '.join(sorted(known))}"
+        )
+    return {**defaults, **value}
+
+
+def _check_sections(sections: dict) -> None:
+    """The settings of every section: types, ranges, URLs (the one place they are checked)."""
+    from studies.stimuli import RenderStyle
+
+    RenderStyle.from_dict(sections["render"])
+    robot, completion = sections["robot"], sections["completion"]
+    family = robot["family"]
+    if not isinstance(family, str) or not NAME_RE.match(family):
+        raise UsageError(f"robot.family must be a model family name like muse, got {family!r}")
+    for key in ("ckpt", "dir"):
+        if robot[key] is not None and not (isinstance(robot[key], str) and robot[key].strip()):
+            raise UsageError(f"robot.{key} must be a path or null, got {robot[key]!r}")
+    overrides = robot["write_overrides"]
+    if not isinstance(overrides, list) or not all(isinstance(o, str) for o in overrides):
+        raise UsageError(
+            "robot.write_overrides must be a list of prg-write overrides (key=value texts)"
+        )
+    for section, key in (("human", "accept_lifted"), ("save", "download")):
+        if not isinstance(sections[section][key], bool):
+            raise UsageError(
+                f"{section}.{key} must be true or false, got {sections[section][key]!r}"
+            )
+    completion["url"] = _url(completion["url"], "completion.url", code=True)
+    delay = completion["redirect_delay_ms"]
+    if (
+        isinstance(delay, bool)
+        or not isinstance(delay, int)
+        or not 0 <= delay <= MAX_REDIRECT_DELAY_MS
+    ):
+        raise UsageError(
+            f"completion.redirect_delay_ms must be an integer from 0 to {MAX_REDIRECT_DELAY_MS} "
+            f"(milliseconds), got {delay!r}"
+        )
+    for section in ("save", "capture"):
+        sections[section]["post_url"] = _url(sections[section]["post_url"], f"{section}.post_url")
+    for key in ("canvas_width", "canvas_height"):
+        value = sections["capture"][key]
+        low, high = CANVAS_PX
+        if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+            raise UsageError(
+                f"capture.{key} must be an integer from {low} to {high} (CSS pixels), got {value!r}"
+            )
+    page = sections["page"]
+    for key in ("title", "consent", "instructions"):
+        if page.get(key) is not None and not isinstance(page[key], str):
+            raise UsageError(f"page.{key} must be text, got {page[key]!r}")
+    labels = page.get("confidence_labels")
+    if labels is not None and (
+        not isinstance(labels, list) or not all(isinstance(x, str) and x.strip() for x in labels)
+    ):
+        raise UsageError(f"page.confidence_labels must be a list of 5 texts, got {labels!r}")
+
+
+def _check_analysis(doc: Mapping, kind: str) -> None:
+    """The ``analysis`` section as ``prg-study analyze`` reads it: known keys, valid values."""
+    analysis = doc.get("analysis") or {}
+    unknown = sorted(set(analysis) - set(ANALYSIS_KEYS))
+    if unknown:
+        raise UsageError(
+            f"analysis: unknown key {unknown[0]!r}: accepted are {', '.join(ANALYSIS_KEYS)}"
+        )
+    try:
+        from studies.analysis.config import config_from_mapping
+    except ImportError:  # the analysis package is optional for building
+        return
+    cfg = config_from_mapping({**doc, **analysis, "kind": kind}, "analysis")
+    if kind == "turing" and cfg.margin is not None and not cfg.margin < cfg.chance:
+        raise UsageError(
+            f"analysis: equivalence_margin {cfg.margin:g} must be below chance {cfg.chance:g}: "
+            "the band chance ± margin must stay above 0"
+        )
 
 
 def _float(doc: Mapping, key: str, default: float, low: float, high: float) -> float:
@@ -215,22 +359,27 @@ def study_from_dict(doc: Mapping[str, Any], source: str = "<dict>") -> StudyConf
     if unknown:
         raise UsageError(f"unknown key {unknown[0]!r}: accepted are {', '.join(sorted(_TOP))}")
     name = doc.get("name")
-    if not isinstance(name, str) or not NAME_RE.match(name):
-        raise UsageError(f"name must be letters, digits, - or _ (a folder name), got {name!r}")
+    if not isinstance(name, str) or not NAME_RE.match(name) or len(name) > 64:
+        raise UsageError(f"name must be 1-64 letters, digits, - or _ (a folder name), got {name!r}")
     kind = doc.get("kind")
     if kind not in KINDS:
         raise UsageError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
     words = doc.get("words")
-    if not isinstance(words, list) or not words:
-        raise UsageError("words must be a non-empty list, e.g. words: [bell, cat, jump]")
+    if not isinstance(words, list) or not words or len(words) > MAX_WORDS:
+        raise UsageError(
+            f"words must be a list of 1 to {MAX_WORDS} words, e.g. words: [bell, cat, jump]"
+            + (f", got {len(words)}" if isinstance(words, list) else f", got {words!r}")
+        )
     for word in words:
-        if not isinstance(word, str) or not WORD_RE.match(word):
-            raise UsageError(f"words: {word!r} is not a word of letters a-z/A-Z")
+        if not isinstance(word, str) or not WORD_RE.match(word) or len(word) > MAX_WORD_LENGTH:
+            raise UsageError(
+                f"words: {word!r} is not a word of 1 to {MAX_WORD_LENGTH} letters a-z/A-Z"
+            )
     if len(set(words)) != len(words):
         dup = next(w for w in words if words.count(w) > 1)
         raise UsageError(f"words: {dup!r} is listed twice")
-    foils = _int(doc, "foils", 4, 1)
-    human_writers = _int(doc, "human_writers", 10, 1)
+    foils = _int(doc, "foils", 4, 1, MAX_FOILS)
+    human_writers = _int(doc, "human_writers", 10, 1, MAX_HUMAN_WRITERS)
     if kind == "turing" and human_writers < foils:
         raise UsageError(
             f"human_writers ({human_writers}) must be at least foils ({foils}): each trial shows "
@@ -251,12 +400,10 @@ def study_from_dict(doc: Mapping[str, Any], source: str = "<dict>") -> StudyConf
         )
     sections = {}
     for key, defaults in _SECTIONS.items():
-        value = doc.get(key) or {}
-        if not isinstance(value, Mapping):
-            raise UsageError(f"{key} must be a mapping of settings, got {value!r}")
-        sections[key] = {**defaults, **value}
+        sections[key] = _section(key, doc.get(key) or {}, defaults)
     if not isinstance(doc.get("analysis") or {}, Mapping):
         raise UsageError("analysis must be a mapping of settings (read by prg-study analyze)")
+    _check_sections(sections)
     if sections["capture"]["on_lift"] not in ON_LIFT:
         raise UsageError(
             f"capture.on_lift must be one of {', '.join(ON_LIFT)}, "
@@ -270,22 +417,20 @@ def study_from_dict(doc: Mapping[str, Any], source: str = "<dict>") -> StudyConf
     code = sections["completion"]["code"]
     if code is None:
         sections["completion"]["code"] = default_completion_code(name, doc.get("seed", 0))
-    elif not isinstance(code, str) or not code.strip():
-        raise UsageError(f"completion.code must be a non-empty string, got {code!r}")
-    for key in ("post_url",):
-        for section in ("save", "capture"):
-            url = sections[section][key]
-            if url is not None and not (isinstance(url, str) and url.strip()):
-                raise UsageError(f"{section}.{key} must be a URL or null, got {url!r}")
+    elif not isinstance(code, str) or not CODE_RE.match(code):
+        raise UsageError(
+            f"completion.code must be 1-64 letters, digits, - or _ (it goes into the "
+            f"completion URL), got {code!r}"
+        )
     config = StudyConfig(
         name=name,
         kind=kind,
         words=tuple(words),
         human_writers=human_writers,
         foils=foils,
-        participants=_int(doc, "participants", 50, 1),
+        participants=_int(doc, "participants", 50, 1, MAX_PARTICIPANTS),
         lists=tuple(lists),
-        seed=_int(doc, "seed", 0, 0),
+        seed=_int(doc, "seed", 0, 0, MAX_SEED),
         equivalence_margin=_float(doc, "equivalence_margin", 0.05, 0.0, 1.0),
         alpha=_float(doc, "alpha", 0.05, 0.0, 0.5),
         robot=sections["robot"],
@@ -297,7 +442,19 @@ def study_from_dict(doc: Mapping[str, Any], source: str = "<dict>") -> StudyConf
         capture=sections["capture"],
         source=source,
     )
+    if kind == "turing" and not config.equivalence_margin < config.chance:
+        raise UsageError(
+            f"equivalence_margin {config.equivalence_margin:g} must be below chance "
+            f"{config.chance:g} (1 / (foils + 1)): the band chance ± margin must stay above 0"
+        )
+    _check_analysis(doc, kind)
     checks = _checks(doc.get("attention_checks") or [], config)
+    trials = config.participants * (len(config.words) + len(checks))
+    if trials > MAX_TRIALS:
+        raise UsageError(
+            f"participants ({config.participants}) x trials each ({len(config.words) + len(checks)}) "
+            f"is {trials} trials; at most {MAX_TRIALS} (the build and trials.json grow with it)"
+        )
     return replace(config, attention_checks=checks)
 
 

@@ -77,6 +77,10 @@ class Sample:
         return ROBOT if self.writer_id == ROBOT else "human"
 
 
+MAX_RENDER_PX = 4000  #: a stimulus PNG's width or height
+MAX_RENDER_PIXELS = 64_000_000  #: supersampled pixels drawn per stimulus (64 MB in grey)
+
+
 @dataclass(frozen=True)
 class RenderStyle:
     """How every stimulus is drawn.
@@ -100,14 +104,36 @@ class RenderStyle:
     supersample: int = 4
 
     def __post_init__(self) -> None:
-        for name in ("width_px", "height_px", "supersample"):
+        for name, high in (
+            ("width_px", MAX_RENDER_PX),
+            ("height_px", MAX_RENDER_PX),
+            ("supersample", 8),
+        ):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise UsageError(f"render.{name} must be a positive integer, got {value!r}")
-        if not isinstance(self.margin_px, int) or self.margin_px < 0:
+            if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= high:
+                raise UsageError(
+                    f"render.{name} must be an integer from 1 to {high}, got {value!r}"
+                )
+        if (
+            isinstance(self.margin_px, bool)
+            or not isinstance(self.margin_px, int)
+            or self.margin_px < 0
+        ):
             raise UsageError(f"render.margin_px must be an integer >= 0, got {self.margin_px!r}")
-        if not isinstance(self.stroke_px, int | float) or not self.stroke_px > 0:
-            raise UsageError(f"render.stroke_px must be a positive number, got {self.stroke_px!r}")
+        if (
+            isinstance(self.stroke_px, bool)
+            or not isinstance(self.stroke_px, int | float)
+            or not 0 < self.stroke_px < math.inf
+        ):
+            raise UsageError(
+                f"render.stroke_px must be a positive finite number, got {self.stroke_px!r}"
+            )
+        drawn = self.width_px * self.height_px * self.supersample**2
+        if drawn > MAX_RENDER_PIXELS:
+            raise UsageError(
+                f"render: width_px x height_px x supersample² is {drawn} pixels per stimulus; "
+                f"at most {MAX_RENDER_PIXELS}"
+            )
         inner = min(self.width_px, self.height_px) - 2 * self.margin_px - self.stroke_px
         if inner <= 0:
             raise UsageError("render: margins and stroke leave no room for the word")

@@ -19,6 +19,7 @@ folders, root included).
 from __future__ import annotations
 
 import importlib.metadata
+import json
 import logging
 import os
 import struct
@@ -93,6 +94,29 @@ CASES = [
         "127.0.0.1:9",
     ),
     case("prepare-log-dir-below-file", "prg-prepare", "paths.log_dir={file}/logs", 2, "a-file.txt"),
+    # numbers out of range (prg.checks.RANGES), unresolvable interpolations, broken source files
+    case("prepare-zero-val-split", "prg-prepare", "data.splits.val=0", 2, "data.splits.val"),
+    case("prepare-nan-split", "prg-prepare", "data.splits.test=nan", 2, "data.splits.test"),
+    case("prepare-inf-sigma", "prg-prepare", "data.preprocess.smooth_sigma=inf", 2, "smooth_sigma"),
+    case("prepare-zero-image-size", "prg-prepare", "data.image.size=0", 2, "data.image.size"),
+    case("prepare-huge-seed", "prg-prepare", "data.seed=99999999999999999999", 2, "data.seed"),
+    case(
+        "prepare-huge-per-class", "prg-prepare", "data.augment.per_class=1000000000", 2, "per_class"
+    ),
+    case(
+        "prepare-uji-coordinate-beyond-int64",
+        "prg-prepare",
+        "data=uji data.uji_path={uji_overflow}",
+        2,
+        "overflow.txt, line 3: coordinate 99999999999999999999 is out of range",
+    ),
+    case(
+        "prepare-unresolvable-env",
+        "prg-prepare",
+        "metrics_path=${{oc.env:PRG_NO_SUCH_VAR}}/m.json",
+        2,
+        "metrics_path=${oc.env:PRG_NO_SUCH_VAR}/m.json cannot be resolved",
+    ),
     # ---- prg-train
     case("train-non-numeric", "prg-train", "trainer.max_epochs=banana", 2, "max_epochs"),
     case("train-negative-seed", "prg-train", "seed=-1", 2, "seed"),
@@ -102,6 +126,47 @@ CASES = [
     case("train-ckpt-is-a-folder", "prg-train", "ckpt_path={folder}", 2, "is a folder"),
     case("train-export-below-file", "prg-train", "export_dir={file}/m", 2, "export_dir"),
     case("train-ckpt-dir-in-sys", "prg-train", "checkpoint_dir=/sys/prg/ckpt", 2, "/sys/prg"),
+    case("train-huge-seed", "prg-train", "seed=99999999999999999999", 2, "seed must be"),
+    case("train-seed-2-64", "prg-train", "seed=18446744073709551616", 2, "4,294,967,295"),
+    case("train-negative-lr", "prg-train", "model.module.optimizer.lr=-1", 2, "optimizer.lr"),
+    case("train-nan-lr", "prg-train", "model.module.optimizer.lr=nan", 2, "optimizer.lr"),
+    case("train-zero-batch", "prg-train", "model.batch_size=0", 2, "model.batch_size"),
+    case("train-inf-limit", "prg-train", "trainer.limit_train_batches=inf", 2, "limit_train"),
+    case(
+        "train-nan-kl-weight", "prg-train", "model=cvae model.module.model.kl_weight=nan", 2, "kl"
+    ),
+    case(
+        "train-truncated-manifest",
+        "prg-train",
+        "paths.data_dir={cut_manifest}",
+        2,
+        "not readable JSON",
+    ),
+    case(
+        "train-manifest-a-list", "prg-train", "paths.data_dir={list_manifest}", 2, "manifest.json"
+    ),
+    case(
+        "train-n-points-mismatch",
+        "prg-train",
+        "paths.data_dir={points50}",
+        2,
+        "data.preprocess.n_points=50, but the models take data.preprocess.n_points=100",
+    ),
+    case(
+        "train-image-size-mismatch",
+        "prg-train",
+        "paths.data_dir={size20}",
+        2,
+        "data.image.size=20, but the models take data.image.size=28",
+    ),
+    case("train-empty-val-split", "prg-train", "paths.data_dir={no_val}", 2, "val.npz is empty"),
+    case(
+        "train-unresolvable-key",
+        "prg-train",
+        "model.module.optimizer.lr=${{no.such.key}}",
+        2,
+        "model.module.optimizer.lr=${no.such.key} cannot be resolved",
+    ),
     # ---- prg-evaluate
     case("evaluate-missing-models", "prg-evaluate", "families=[muse]", 2, "does not exist"),
     case(
@@ -123,6 +188,24 @@ CASES = [
         2,
         "a-file.txt",
     ),
+    case(
+        "evaluate-nan-temperature",
+        "prg-evaluate",
+        "coherence.temperatures.sampled=nan",
+        2,
+        "sampled",
+    ),
+    case("evaluate-inf-k", "prg-evaluate", "likelihood.k_conditional=inf", 2, "k_conditional"),
+    case("evaluate-huge-seed", "prg-evaluate", "seed=18446744073709551616", 2, "seed must be"),
+    case("evaluate-zero-classifier-lr", "prg-evaluate", "classifier.lr=0", 2, "classifier.lr"),
+    case("evaluate-zero-n-test", "prg-evaluate", "n_test=0", 2, "n_test"),
+    case(
+        "evaluate-n-points-mismatch",
+        "prg-evaluate",
+        "+checkpoints.m={ckpt} paths.data_dir={points50}",
+        2,
+        "data.preprocess.n_points=50",
+    ),
     # ---- prg-write
     case("write-unknown-characters", "prg-write", "text=h@llo", 2, "'@'"),
     case("write-empty-text", "prg-write", "text=", 2, "text is empty"),
@@ -139,6 +222,68 @@ CASES = [
     case("write-out-below-file", "prg-write", "text=hi out_dir={file}/out", 2, "a-file.txt"),
     case("write-out-in-sys", "prg-write", "text=hi out_dir=/sys/prg-out", 2, "/sys/prg-out"),
     case("write-out-is-a-file", "prg-write", "text=hi out_dir={file}", 2, "a-file.txt"),
+    case(
+        "write-nan-temperature", "prg-write", "text=hi generate.temperature=nan", 2, "temperature"
+    ),
+    case("write-inf-speed", "prg-write", "text=hi generate.speed_cm_s=inf", 2, "speed_cm_s"),
+    case(
+        "write-huge-temperature", "prg-write", "text=hi generate.temperature=1e300", 2, "in [0, 10]"
+    ),
+    case(
+        "write-huge-letters", "prg-write", "text=hi layout.letter_height=1e300", 2, "letter_height"
+    ),
+    case(
+        "write-zero-letter-height",
+        "prg-write",
+        "text=hi layout.letter_height=0",
+        2,
+        "letter_height",
+    ),
+    case("write-negative-ramp", "prg-write", "text=hi generate.ramp_s=-1", 2, "generate.ramp_s"),
+    case("write-huge-seed", "prg-write", "text=hi generate.seed=2e30", 2, "generate.seed"),
+    case(
+        "write-long-word",
+        "prg-write",
+        "text=" + "a" * 1000,
+        2,
+        "1000 letters: accepted are at most",
+    ),
+    case(
+        "write-slow-pen-huge-dmp",
+        "prg-write",
+        "text=hi generate.speed_cm_s=0.001",
+        2,
+        "at most 20,000",
+    ),
+    case("write-long-audio", "prg-write", "audio={long_wav}", 2, "speech.max_seconds=30"),
+    case(
+        "write-inf-max-seconds",
+        "prg-write",
+        "audio={silent_wav} speech.max_seconds=inf",
+        2,
+        "max_seconds",
+    ),
+    case(
+        "write-binary-lexicon",
+        "prg-write",
+        "audio={silent_wav} speech.lexicon={garbage}",
+        2,
+        "lexicon",
+    ),
+    case(
+        "write-number-in-lexicon",
+        "prg-write",
+        "audio={silent_wav} speech.lexicon=[cat,7]",
+        2,
+        "[1]=7",
+    ),
+    case(
+        "write-unresolvable-env",
+        "prg-write",
+        "text=hi out_dir=${{oc.env:PRG_NO_SUCH_VAR}}",
+        2,
+        "PRG_NO_SUCH_VAR",
+    ),
     # ---- prg-dictaphone
     case("dictaphone-unknown-characters", "prg-dictaphone", "words=[b@ll]", 2, "'@'"),
     case("dictaphone-no-words", "prg-dictaphone", "words=[]", 2, "words"),
@@ -147,6 +292,29 @@ CASES = [
     case("dictaphone-text-ckpt", "prg-dictaphone", "ckpt={text_ckpt}", 2, "notes.ckpt"),
     case("dictaphone-no-test-split", "prg-dictaphone", "channels=[image]", 2, "test.npz"),
     case("dictaphone-out-below-file", "prg-dictaphone", "out_dir={file}/dict", 2, "a-file.txt"),
+    case("dictaphone-word-read-as-bool", "prg-dictaphone", "words=[true]", 2, "words[0]=True"),
+    case(
+        "dictaphone-word-read-as-number", "prg-dictaphone", "words=[cat,1e3]", 2, "words[1]=1000.0"
+    ),
+    case("dictaphone-inf-speed", "prg-dictaphone", "speed=inf", 2, "speed must be"),
+    case(
+        "dictaphone-nan-temperature", "prg-dictaphone", "generate.temperature=nan", 2, "temperature"
+    ),
+    case(
+        "dictaphone-long-word",
+        "prg-dictaphone",
+        "words=[" + "b" * 70 + "]",
+        2,
+        "words has 70 letters",
+    ),
+    case("dictaphone-binary-lexicon", "prg-dictaphone", "speech.lexicon={garbage}", 2, "lexicon"),
+    case(
+        "dictaphone-n-points-mismatch",
+        "prg-dictaphone",
+        "channels=[image] paths.data_dir={points50}",
+        2,
+        "data.preprocess.n_points=50",
+    ),
     # ---- prg-simulate
     case("simulate-unknown-robot", "prg-simulate", "word={word} robot=kuka", 2, "kuka"),
     case(
@@ -174,6 +342,49 @@ CASES = [
     case("simulate-zero-tempo", "prg-simulate", "word={word} tempo=0", 2, "tempo"),
     case("simulate-non-numeric-scale", "prg-simulate", "word={word} scale=big", 2, "scale"),
     case("simulate-out-below-file", "prg-simulate", "word={word} out_dir={file}/sim", 2, "a-file"),
+    case("simulate-text-as-urdf", "prg-simulate", "word={word} robot.urdf={file}", 2, "not a URDF"),
+    case(
+        "simulate-binary-urdf", "prg-simulate", "word={word} robot.urdf={garbage}", 2, "not a URDF"
+    ),
+    case(
+        "simulate-zero-page-width",
+        "prg-simulate",
+        "word={word} paper.size_cm=[0,29.7]",
+        2,
+        "size_cm[0]",
+    ),
+    case(
+        "simulate-zero-camera-width",
+        "prg-simulate",
+        "word={word} camera.width=0",
+        2,
+        "camera.width",
+    ),
+    case("simulate-nan-scale", "prg-simulate", "word={word} scale=nan", 2, "scale must be"),
+    case("simulate-huge-scale", "prg-simulate", "word={word} scale=1e300", 2, "scale must be"),
+    case("simulate-slow-word", "prg-simulate", "word={slow_word}", 2, "at most 600 s of writing"),
+    case("simulate-inf-tempo", "prg-simulate", "word={word} tempo=inf", 2, "tempo must be"),
+    case(
+        "simulate-negative-time-step",
+        "prg-simulate",
+        "word={word} control.time_step=-0.01",
+        2,
+        "time_step",
+    ),
+    case(
+        "simulate-nan-pen-offset",
+        "prg-simulate",
+        "word={word} robot.pen_offset=[0,0,nan]",
+        2,
+        "pen_offset[2]",
+    ),
+    case(
+        "simulate-unresolvable-env",
+        "prg-simulate",
+        "word={word} robot.urdf=${{oc.env:PRG_NO_SUCH_VAR}}",
+        2,
+        "robot.urdf=${oc.env:PRG_NO_SUCH_VAR} cannot be resolved",
+    ),
     # ---- prg-study
     case("study-no-command", "prg-study", [], 2, "choose a command"),
     case("study-missing-file", "prg-study", "build {tmp}/nope.yaml", 2, "no such study file"),
@@ -200,6 +411,154 @@ CASES = [
         "simulate turing --participants 3 --true-rate 0.2 --out /sys/prg/s.csv",
         2,
         "/sys/prg",
+    ),
+    # study settings (a study file's keys or --set), checked in studies.design.study_from_dict
+    case(
+        "study-negative-alpha", "prg-study", "build {turing} --set alpha=-0.1", 2, "alpha must be"
+    ),
+    case(
+        "study-negative-redirect-delay",
+        "prg-study",
+        "build {turing} --set completion.redirect_delay_ms=-500",
+        2,
+        "completion.redirect_delay_ms must be an integer from 0 to",
+    ),
+    case(
+        "study-zero-margin", "prg-study", "build {turing} --set equivalence_margin=0", 2, "margin"
+    ),
+    case(
+        "study-negative-stroke",
+        "prg-study",
+        "build {turing} --set render.stroke_px=-1",
+        2,
+        "render.stroke_px must be a positive",
+    ),
+    case(
+        "study-url-without-code",
+        "prg-study",
+        "build {turing} --set completion.url=https://example.org/done",
+        2,
+        "has no {code} placeholder",
+    ),
+    case(
+        "study-url-javascript",
+        "prg-study",
+        "build {turing} --set completion.url=javascript:alert(1)//{{code}}",
+        2,
+        "completion.url must be an http:// or https:// URL",
+    ),
+    case(
+        "study-url-data",
+        "prg-study",
+        "build {turing} --set completion.url=data:text/html,{{code}}",
+        2,
+        "completion.url must be an http:// or https:// URL",
+    ),
+    case(
+        "study-post-url-ftp",
+        "prg-study",
+        "build {turing} --set save.post_url=ftp://example.org/in",
+        2,
+        "save.post_url must be an http:// or https:// URL",
+    ),
+    case(
+        "study-canvas-zero-width",
+        "prg-study",
+        "build {turing} --set capture.canvas_width=0",
+        2,
+        "capture.canvas_width must be an integer from",
+    ),
+    case(
+        "study-canvas-zero-height",
+        "prg-study",
+        "build {turing} --set capture.canvas_height=0",
+        2,
+        "capture.canvas_height must be an integer from",
+    ),
+    case(
+        "study-render-zero-height",
+        "prg-study",
+        "build {turing} --set render.height_px=0",
+        2,
+        "render.height_px must be an integer from 1 to",
+    ),
+    case("study-nan-alpha", "prg-study", "build {turing} --set alpha=.nan", 2, "alpha must be"),
+    case(
+        "study-inf-stroke",
+        "prg-study",
+        "build {turing} --set render.stroke_px=.inf",
+        2,
+        "render.stroke_px must be a positive finite number",
+    ),
+    case(
+        "study-nan-canvas",
+        "prg-study",
+        "build {turing} --set capture.canvas_height=.nan",
+        2,
+        "capture.canvas_height must be an integer",
+    ),
+    case(
+        "study-inf-analysis-margin",
+        "prg-study",
+        "build {turing} --set analysis.equivalence_margin=.inf",
+        2,
+        "analysis: equivalence_margin inf is outside",
+    ),
+    case(
+        "study-huge-participants",
+        "prg-study",
+        "build {turing} --set participants=1000000000",
+        2,
+        "participants must be an integer from 1 to 10000",
+    ),
+    case(
+        "study-huge-render",
+        "prg-study",
+        "build {turing} --set render.width_px=1000000",
+        2,
+        "render.width_px must be an integer from 1 to 4000",
+    ),
+    case(
+        "study-huge-trial-count",
+        "prg-study",
+        "build {turing} --set participants=10000 --set words=[aa,ab,ac,ad,ae,af,ag,ah,ai,aj,ba,bb,bc,bd,be,bf,bg,bh,bi,bj]",
+        2,
+        "is 210000 trials; at most 200000",
+    ),
+    case(
+        "study-unknown-setting",
+        "prg-study",
+        "build {turing} --set completion.colour=red",
+        2,
+        "completion: unknown key 'colour'",
+    ),
+    case(
+        "study-simulate-huge",
+        "prg-study",
+        "simulate turing --participants 1000000000 --true-rate 0.2 --out {tmp}/s.csv",
+        2,
+        "is 11000000000 rows; at most 1000000",
+    ),
+    case(
+        "study-simulate-huge-words",
+        "prg-study",
+        "simulate turing --participants 3 --words 100000000 --true-rate 0.2 --out {tmp}/s.csv",
+        2,
+        "--words 100000000: give 2 to 1000 words",
+    ),
+    case(
+        "study-simulate-negative-seed",
+        "prg-study",
+        "simulate turing --participants 3 --true-rate 0.2 --seed -5 --out {tmp}/s.csv",
+        2,
+        "argument --seed: -5 must be 0 or more",
+    ),
+    case(
+        "study-power-nan-difference",
+        "prg-study",
+        "power readability --difference nan",
+        2,
+        "argument --difference: nan is outside (-1, 1)",
     ),
 ]
 
@@ -285,7 +644,53 @@ def bad_files(tmp: Path, checkpoint: Path) -> dict[str, Path]:
     files["bad_yaml"].write_text("name: [turing\nkind: {\n")
     files["bad_csv"] = tmp / "responses.csv"
     files["bad_csv"].write_bytes(b'participant,"word\n\x00\x01,"x\n')
+    files.update(bad_datasets(tmp))
+    files["uji_overflow"] = tmp / "overflow.txt"
+    files["uji_overflow"].write_text(
+        "WORD a trn_UJI_W01-01\nNUMSTROKES 1\nPOINTS 2 # 1 2 99999999999999999999 4\n"
+    )
+    slow = json.loads(files["word"].read_text())
+    slow["dmp"]["tau"] = slow["duration_s"] = 3600.0  # an hour of writing
+    files["slow_word"] = tmp / "slow-word.json"
+    files["slow_word"].write_text(json.dumps(slow))
+    files["long_wav"] = tmp / "long.wav"  # 40 s: longer than speech.max_seconds (30 s)
+    _wav(files["long_wav"], np.zeros(40 * 16000))
     return files
+
+
+def _dataset(data_dir: Path, n_points: int = 100, size: int = 28, n_val: int = 4) -> Path:
+    """A prepared dataset of a few random samples per split, as prg-prepare writes it."""
+    from prg.data.store import save_split
+
+    folder = data_dir / "prepared/synthetic"
+    folder.mkdir(parents=True)
+    rng = np.random.default_rng(0)
+    for split, n in (("train", 8), ("val", n_val), ("test", 4)):
+        arrays = {
+            "traj": rng.normal(0, 0.5, (n, 2 * n_points)).astype(np.float32),
+            "image": rng.integers(0, 256, (n, size, size), dtype=np.uint8),
+            "label": np.arange(n, dtype=np.int64),
+            "writer": np.array([f"w{split}"] * n),
+            "augmented": np.zeros(n, dtype=bool),
+            "parent": np.full(n, -1, dtype=np.int64),
+        }
+        save_split(folder / f"{split}.npz", arrays)
+    (folder / "manifest.json").write_text('{"source": "synthetic"}\n')
+    return data_dir
+
+
+def bad_datasets(tmp: Path) -> dict[str, Path]:
+    """Prepared datasets the models cannot take, and dataset folders with a broken manifest."""
+    found = {
+        "points50": _dataset(tmp / "points50", n_points=50),
+        "size20": _dataset(tmp / "size20", size=20),
+        "no_val": _dataset(tmp / "no-val", n_val=0),
+    }
+    for name, text in (("cut_manifest", '{"source": "synth'), ("list_manifest", "[1, 2]")):
+        found[name] = tmp / name
+        (found[name] / "prepared/synthetic").mkdir(parents=True)
+        (found[name] / "prepared/synthetic/manifest.json").write_text(text)
+    return found
 
 
 @pytest.fixture(scope="module")

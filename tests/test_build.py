@@ -124,3 +124,46 @@ def test_augmented_letters_are_still_recognisable(small_dataset):
     predicted = ref_labels[dist.argmin(axis=1)]
     right = [_case_twins(ALPHABET[p], ALPHABET[t]) for p, t in zip(predicted, truth)]
     assert np.mean(right) >= 0.9, np.mean(right)
+
+
+@pytest.mark.parametrize(
+    ("seed", "n_writers", "fractions"),
+    [(1, 6, (0.5, 0.25, 0.25)), (2, 6, (0.7, 0.15, 0.15)), (3, 5, (0.4, 0.2, 0.4))],
+)
+def test_augmented_samples_keep_their_parents_writer_and_split_for_several_seeds(
+    tmp_path, seed, n_writers, fractions
+):
+    """Writer-disjointness must hold through augmentation whatever the split assignment is: one
+    fixture seed can put the writers in an order where a sample pointed at the wrong row still
+    gets a training writer. A few small builds (6 characters) with other seeds and fractions."""
+    train_f, val_f, test_f = fractions
+    cfg = small_data_cfg(
+        **{
+            "data.synthetic.n_writers": n_writers,
+            "data.augment.per_class": 3,
+            "data.seed": seed,
+            "data.splits.train": train_f,
+            "data.splits.val": val_f,
+            "data.splits.test": test_f,
+        }
+    )
+    cfg["synthetic"]["characters"] = "aeosT7"
+    out = build_dataset(cfg, tmp_path, workers=1, progress=False, figures=False).out_dir
+    splits = {s: load_split(out / f"{s}.npz") for s in ("train", "val", "test")}
+    assignment = json.loads((out / "manifest.json").read_text())["splits"]
+    assert set().union(*assignment.values()) == {f"SYN_W{w + 1:02d}" for w in range(n_writers)}
+    for split, arrays in splits.items():
+        # every sample, augmented or not, belongs to a writer of its own split
+        assert set(arrays["writer"]) <= set(assignment[split]), split
+    for split in ("val", "test"):
+        assert not splits[split]["augmented"].any()
+        assert (splits[split]["parent"] == -1).all()
+    train = splits["train"]
+    children = np.flatnonzero(train["augmented"])
+    assert len(children) == 3 * 6  # per_class x characters
+    parents = train["parent"][children]
+    assert ((parents >= 0) & (parents < len(train["label"]))).all()
+    assert (~train["augmented"][parents]).all()
+    assert (train["parent"][~train["augmented"]] == -1).all()
+    np.testing.assert_array_equal(train["writer"][children], train["writer"][parents])
+    np.testing.assert_array_equal(train["label"][children], train["label"][parents])

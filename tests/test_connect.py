@@ -115,8 +115,10 @@ def test_retrace_joins_inside_the_letter_and_runs_back_to_its_first_point():
     prev = np.column_stack([np.linspace(-1.0, 0.0, 20), np.zeros(20)])
     nxt = np.column_stack([np.full(41, 0.5), np.linspace(1.0, -1.0, 41)])
     result = connect_letters(prev, nxt, join="retrace", home_radius=0.0, theta_f=0.0, theta_p=4.0)
-    assert 0 < result.target < 40
+    assert 0 < result.target < 40 and result.fallback is False
     back = result.points[result.steered :]
+    np.testing.assert_allclose(back[:, 0], 0.5)  # the return runs on the letter itself ...
+    assert np.all(np.diff(back[:, 1]) > 0)  # ... upwards to its first point, never repeating one
     # the return passes through nxt[target], ..., nxt[1] in that order
     hits = [
         int(np.flatnonzero(np.all(np.isclose(back, nxt[k]), axis=1))[0])
@@ -257,3 +259,178 @@ def test_arbitrary_inputs_give_finite_gap_free_connections(
         join=join,
     )
     check_guarantees(prev, nxt, result, delta, alpha_max, max_steps)
+
+
+# ---- non-default parameters: every steered step is the cheapest candidate ----------------------
+# The guarantees above hold for any weights, so they cannot tell a weight that is ignored or
+# swapped. Here each steered step is checked against the candidate competition of the module
+# docstring, recomputed in the test: one candidate per target point (the heading turned towards
+# it, clipped to alpha_max, one step of delta), cost theta_o j/m + theta_a A + theta_f F + theta_p P
+# with min-max normalised A, F, P, only the first point once within home_radius. Steps where a
+# target lies within two turning radii of the pen are skipped (the orbit rule may apply there).
+
+
+def _minmax(v: np.ndarray) -> np.ndarray:
+    span = v.max() - v.min()
+    return (v - v.min()) / span if span > 1e-12 * max(1.0, abs(v.min())) else np.zeros_like(v)
+
+
+def _check_steps_are_cheapest(prev, nxt, result, kw) -> int:
+    delta, alpha = kw["delta"], kw["alpha_max"]
+    radius = delta / (2 * math.sin(alpha / 2))
+    steered = result.points[: result.steered]
+    pens = np.concatenate([prev[-1:], steered])
+    d = np.diff(prev, axis=0)
+    first_dir = d[np.hypot(d[:, 0], d[:, 1]) > 1e-12][-1]
+    checked = 0
+    homing = False
+    for i in range(result.steered):
+        pen = pens[i]
+        into = first_dir if i == 0 else pens[i] - pens[i - 1]
+        heading = math.atan2(into[1], into[0])
+        homing = homing or np.hypot(*(nxt[0] - pen)) < kw["home_radius"]
+        targets = nxt[:1] if homing else nxt
+        to = targets - pen
+        if np.hypot(to[:, 0], to[:, 1]).min() <= 2 * radius:
+            continue
+        wanted = np.angle(np.exp(1j * (np.arctan2(to[:, 1], to[:, 0]) - heading)))
+        turn = np.clip(wanted, -alpha, alpha)
+        cand = pen + delta * np.column_stack([np.cos(heading + turn), np.sin(heading + turn)])
+        m = len(nxt)
+        cost = (
+            kw["theta_o"] * np.arange(len(targets)) / m
+            + kw["theta_a"] * _minmax(np.abs(turn))
+            + kw["theta_f"] * _minmax(np.hypot(*(cand - nxt[0]).T))
+            + kw["theta_p"] * _minmax(np.hypot(*(cand - targets).T))
+        )
+        cheapest = cand[cost <= cost.min() + 1e-9]
+        assert np.hypot(*(cheapest - pens[i + 1]).T).min() < 1e-9, f"step {i}"
+        checked += 1
+    return checked
+
+
+@pytest.mark.parametrize(
+    "kw",
+    [
+        {"theta_o": 2.0, "theta_a": 0.3, "theta_f": 1.0, "theta_p": 3.0, "home_radius": 0.25},
+        {"theta_o": 0.0, "theta_a": 2.5, "theta_f": 0.5, "theta_p": 0.0, "home_radius": 0.0},
+        {"theta_o": 0.5, "theta_a": 0.0, "theta_f": 0.0, "theta_p": 1.0, "home_radius": 0.6},
+        {"theta_o": 3.0, "theta_a": 0.0, "theta_f": 0.0, "theta_p": 0.0, "home_radius": 0.0},
+    ],
+    ids=["mixed", "turn-averse", "own-target", "index-only"],
+)
+@pytest.mark.parametrize(("delta", "alpha_deg"), [(0.04, 25.0), (0.08, 12.0)])
+def test_each_steered_step_is_the_cheapest_candidate_for_non_default_weights(kw, delta, alpha_deg):
+    kw = {**kw, "delta": delta, "alpha_max": math.radians(alpha_deg)}
+    checked = 0
+    for prev, nxt in PAIRS[:5]:
+        result = connect_letters(prev, nxt, max_steps=80, **kw)
+        check_guarantees(prev, nxt, result, delta, kw["alpha_max"], 80)
+        checked += _check_steps_are_cheapest(prev, nxt, result, kw)
+    assert checked > 30  # the check ran on many steps, not only on skipped ones
+
+
+def _same_result(a, b) -> None:
+    """Every field of two ConnectionResults."""
+    np.testing.assert_array_equal(a.points, b.points)
+    assert (a.steered, a.target, a.fallback) == (b.steered, b.target, b.fallback)
+
+
+def test_connect_sequence_passes_non_default_params_to_both_joiners():
+    params = ConnectionParams(delta=0.03, alpha_max=math.radians(30), theta_f=2.0, theta_p=1.5)
+    letters = [PAIRS[5][0], PAIRS[5][1], PAIRS[5][1] + [2.5, 0.0], PAIRS[6][0] + [5.0, 0.0]]
+    results = connect_sequence(letters, params, breaks=[False, True, False])
+    _same_result(results[0], connect_letters(letters[0], letters[1], **params.as_kwargs()))
+    _same_result(results[1], straight_connection(letters[1], letters[2], params.delta))
+    _same_result(results[2], connect_letters(letters[2], letters[3], **params.as_kwargs()))
+    straight = connect_sequence(letters, params, method="straight")
+    for r, a, b in zip(straight, letters[:-1], letters[1:]):
+        _same_result(r, straight_connection(a, b, params.delta))
+    # without breaks every pair is joined by Algorithm 1
+    for r, a, b in zip(connect_sequence(letters, params), letters[:-1], letters[1:]):
+        _same_result(r, connect_letters(a, b, **params.as_kwargs()))
+
+
+def test_connect_sequence_of_one_letter_has_no_connections():
+    assert connect_sequence([PAIRS[0][0]]) == []
+    assert connect_sequence([PAIRS[0][0]], breaks=[]) == []
+    assert connect_sequence([]) == []
+
+
+def test_straight_joiner_result_fields_and_bad_arguments():
+    result = straight_connection([[0.0, 0.0]], [[1.0, 0.0]], delta=0.3)
+    assert (result.steered, result.target, result.fallback) == (0, 0, False)
+    assert isinstance(result.fallback, bool) and isinstance(result.target, int)
+    for kwargs, match in [
+        ({"prev": np.zeros((2, 3))}, "prev must have shape"),
+        ({"nxt": [[np.inf, 0.0]]}, "nxt contains NaN"),
+        ({"delta": -1.0}, "delta must be a positive"),
+    ]:
+        args = {"prev": [[0.0, 0.0]], "nxt": [[1.0, 0.0]], "delta": 0.3, **kwargs}
+        with pytest.raises(UsageError, match=match):
+            straight_connection(**args)
+
+
+@pytest.mark.parametrize(
+    ("dist", "delta"),
+    [(0.05, 0.05), (0.02, 0.05), (1.05, 0.03), (2.1, 0.06), (1.0, 0.07), (0.3, 0.1)],
+)
+def test_subdivide_uses_the_fewest_pieces_that_keep_every_gap_within_delta(dist, delta):
+    # (1.05, 0.03) and (2.1, 0.06): ceil(dist / delta) rounds one piece short in floating point
+    pts = subdivide(np.zeros(2), np.array([dist, 0.0]), delta)
+    pieces = len(pts) + 1
+    assert dist / pieces <= delta  # every gap within delta ...
+    assert pieces == 1 or dist / (pieces - 1) > delta  # ... and one piece fewer would not do
+    np.testing.assert_allclose(pts[:, 0], np.arange(1, pieces) * dist / pieces, rtol=1e-12)
+    assert np.all(pts[:, 1] == 0.0)
+
+
+@pytest.mark.parametrize("k", [3, 8, 15])
+def test_running_out_of_steps_cuts_the_path_at_its_closest_approach(k):
+    # the first k steps do not depend on max_steps, so the path cut at k is a prefix of the full
+    # connection: kept up to its point closest to the target, or not at all when the start is
+    # closer, then the straight tail (module docstring, guarantee 1)
+    prev, nxt = PAIRS[7]
+    full = connect_letters(prev, nxt)
+    assert not full.fallback and full.steered > 15
+    steps = full.points[:k]
+    gaps = np.hypot(*(steps - nxt[0]).T)
+    keep = int(np.argmin(gaps)) + 1
+    if np.hypot(*(prev[-1] - nxt[0])) <= gaps[keep - 1]:
+        keep = 0
+    cut = connect_letters(prev, nxt, max_steps=k)
+    assert (cut.steered, cut.target, cut.fallback) == (keep, 0, True)
+    np.testing.assert_array_equal(cut.points[:keep], steps[:keep])
+    tail_from = steps[keep - 1] if keep else prev[-1]
+    np.testing.assert_allclose(cut.points[keep:], subdivide(tail_from, nxt[0], P.delta))
+
+
+def test_every_result_field_of_a_joined_connection():
+    for join in ("first", "retrace"):
+        for prev, nxt in PAIRS[:10]:
+            r = connect_letters(prev, nxt, join=join)
+            assert r.fallback is False and isinstance(r.target, int)
+            if join == "first":
+                assert r.steered == len(r.points) and r.target == 0
+            else:
+                assert 0 <= r.target < len(nxt) and r.steered <= len(r.points)
+            steps = np.hypot(*np.diff(connection_path(prev, r, nxt), axis=0).T)
+            assert np.all(steps > 0)  # no point is repeated
+
+
+@pytest.mark.parametrize("name", ["alpha_max", "theta_o", "theta_a", "theta_f", "theta_p"])
+def test_each_bad_weight_is_named(name):
+    with pytest.raises(UsageError, match=f"{name} must be"):
+        connect_letters([[0.0, 0.0], [1.0, 0.0]], [[2.0, 0.0]], **{name: -1.0})
+
+
+def test_a_letter_without_extent_starts_the_pen_towards_the_next_letter():
+    prev = np.array([[1.0, 1.0], [1.0, 1.0]])  # a dot: no last segment to take a heading from
+    result = connect_letters(prev, np.array([[3.0, 1.0], [3.5, 1.5]]))
+    np.testing.assert_allclose(result.points[0], [1.0 + P.delta, 1.0], atol=1e-12)
+
+
+def test_a_half_turn_per_step_is_allowed():
+    prev, nxt = PAIRS[8]
+    result = connect_letters(prev, nxt, alpha_max=math.pi)  # documented range (0, pi]
+    check_guarantees(prev, nxt, result, P.delta, math.pi, P.max_steps)

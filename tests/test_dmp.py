@@ -173,9 +173,10 @@ def test_a_slower_tempo_traces_the_same_path(word_dmp):
 
 
 def test_vectorised_rollout_matches_a_per_step_rk4_integration(word_dmp):
-    # what is left is the cubic interpolation of the input between samples: ~1e-5 cm here
+    # what is left is the cubic interpolation of the input between samples: 1.4e-5 cm here
+    # (a cubic through four samples that are not the nearest ones leaves 2.4e-5 cm)
     reference = rk4_reference(word_dmp, word_dmp.n_samples)
-    assert_allclose(rollout(word_dmp), reference, rtol=0, atol=5e-5)
+    assert_allclose(rollout(word_dmp), reference, rtol=0, atol=2e-5)
     # and it shrinks like h^4 on finer grids: 2x the samples, ~16x closer
     finer = rollout(word_dmp, n_samples=2 * word_dmp.n_samples - 1)[::2]
     assert np.abs(finer - reference).max() < np.abs(rollout(word_dmp) - reference).max() / 8
@@ -353,3 +354,275 @@ def test_any_bounded_finite_points_give_finite_rollouts(points, tau, goal_shift)
     assert out.shape == points.shape and np.all(np.isfinite(out))
     moved = rollout(dmp, goal=points[-1] + goal_shift, n_samples=50)
     assert np.all(np.isfinite(moved))
+
+
+# ----------------------------------------------------------------------------- non-default arguments
+# Every public constant of the DMP can be changed; a formula that uses the module default where
+# it should use the argument is invisible at the defaults, so these tests use other values and
+# check against formulas written here and against the per-step RK4 integration.
+
+NON_DEFAULT = [
+    # stiffness, damping (None: critical), alpha_x, width_factor, n_basis, tau, regularisation
+    pytest.param(400.0, None, 3.0, 1.5, 150, 0.7, 1e-12, id="stiff-critical"),
+    pytest.param(100.0, 12.0, 6.0, 0.8, 220, 2.0, 1e-12, id="underdamped"),
+    pytest.param(60.0, 30.0, 2.0, 1.2, 180, 1.3, 1e-9, id="overdamped-slow-phase"),
+]
+
+
+@pytest.mark.parametrize(
+    ("stiffness", "damping", "alpha_x", "width_factor", "n_basis", "tau", "lam"), NON_DEFAULT
+)
+def test_non_default_constants_are_stored_used_and_reproduce_the_demonstration(
+    stiffness, damping, alpha_x, width_factor, n_basis, tau, lam
+):
+    points = word_like(600, loops=7)
+    dmp = fit_dmp(
+        points,
+        tau=tau,
+        n_basis=n_basis,
+        regularisation=lam,
+        stiffness=stiffness,
+        damping=damping,
+        alpha_x=alpha_x,
+        width_factor=width_factor,
+    )
+    # every field, against the documented formulas
+    want_damping = 2.0 * math.sqrt(stiffness) if damping is None else damping
+    assert (dmp.stiffness, dmp.damping, dmp.alpha_x, dmp.tau) == (
+        stiffness,
+        pytest.approx(want_damping, rel=1e-15),
+        alpha_x,
+        tau,
+    )
+    assert (dmp.n_basis, dmp.dims, dmp.n_samples) == (n_basis, 2, 600)
+    assert_array_equal(dmp.y0, points[0])
+    assert_array_equal(dmp.goal, points[-1])
+    centres = np.exp(-alpha_x * np.arange(n_basis) / (n_basis - 1))
+    spacing = centres[:-1] - centres[1:]
+    assert_allclose(dmp.centres, centres, rtol=1e-13)
+    assert_allclose(dmp.widths[:-1], 1 / (2 * (width_factor * spacing) ** 2), rtol=1e-9)
+    assert dmp.widths[-1] == dmp.widths[-2]
+    # the weights are the ridge solution for the targets of *these* constants
+    _, targets = forcing_targets(points, tau, stiffness, want_damping, alpha_x)
+    phi = _design_for(dmp, 600)
+    stacked = np.vstack([phi / math.sqrt(600), math.sqrt(lam) * np.eye(n_basis)])
+    padded = np.vstack([targets / math.sqrt(600), np.zeros((n_basis, 2))])
+    expected = np.linalg.lstsq(stacked, padded, rcond=None)[0]
+    assert_allclose(dmp.weights, expected, rtol=1e-6, atol=1e-8 * np.abs(expected).max())
+    # the rollout integrates the ODE of these constants (RK4 from the formulation) ...
+    out = rollout(dmp)
+    assert_allclose(out, rk4_reference(dmp, 600, substeps=4), rtol=0, atol=1e-5)
+    # ... and so reproduces the demonstration, start and end included
+    assert rmse(out, points) < 1e-3  # cm (measured 5e-6 .. 3e-5)
+    assert_array_equal(out[0], points[0])
+    assert_allclose(out[-1], points[-1], atol=1e-3)
+
+
+@pytest.mark.parametrize(
+    ("stiffness", "damping", "alpha_x", "width_factor", "n_basis", "tau", "lam"), NON_DEFAULT
+)
+def test_non_default_constants_move_the_goal_by_their_own_transition(
+    stiffness, damping, alpha_x, width_factor, n_basis, tau, lam
+):
+    points = word_like(400, loops=5)
+    dmp = fit_dmp(
+        points,
+        tau=tau,
+        n_basis=n_basis,
+        regularisation=lam,
+        stiffness=stiffness,
+        damping=damping,
+        alpha_x=alpha_x,
+        width_factor=width_factor,
+    )
+    # s(t): the zero-weight DMP from 0 to 1 with the same constants, by RK4
+    unit = DMP(
+        weights=np.zeros((n_basis, 1)),
+        y0=[0.0],
+        goal=[1.0],
+        tau=tau,
+        stiffness=stiffness,
+        damping=2.0 * math.sqrt(stiffness) if damping is None else damping,
+        alpha_x=alpha_x,
+        centres=dmp.centres,
+        widths=dmp.widths,
+        n_samples=400,
+    )
+    s = rk4_reference(unit, 400, substeps=4)[:, 0]
+    shift = np.array([-1.2, 0.9])
+    moved = rollout(dmp, goal=dmp.goal + shift)
+    assert_allclose(moved - rollout(dmp), np.outer(s, shift), atol=1e-6)
+    # and a new start: (y0_new - y0) (1 - s)
+    start_shift = np.array([0.5, -2.0])
+    restarted = rollout(dmp, y0=dmp.y0 + start_shift)
+    assert_allclose(restarted - rollout(dmp), np.outer(1.0 - s, start_shift), atol=1e-6)
+
+
+def test_basis_functions_use_a_non_default_width_factor_and_phase_constant():
+    for n_basis, alpha_x, width_factor in [(7, 1.5, 2.5), (40, 5.0, 0.6)]:
+        centres, widths = basis_functions(n_basis, alpha_x=alpha_x, width_factor=width_factor)
+        want = np.exp(-alpha_x * np.linspace(0.0, 1.0, n_basis))
+        assert_allclose(centres, want, rtol=1e-14)
+        spacing = want[:-1] - want[1:]
+        assert_allclose(widths, 1 / (2 * (width_factor * np.append(spacing, spacing[-1])) ** 2))
+    # one basis function: the spacing 1 - exp(-alpha_x)
+    centres, widths = basis_functions(1, alpha_x=2.0, width_factor=3.0)
+    assert_array_equal(centres, [1.0])
+    assert_allclose(widths, [1 / (2 * (3.0 * (1 - math.exp(-2.0))) ** 2)])
+
+
+def test_phase_with_a_non_default_constant_is_the_closed_form():
+    t = np.linspace(0.0, 2.5, 11)
+    assert_allclose(dmp_module.phase(t, 2.5, alpha_x=0.7), np.exp(-0.7 * t / 2.5), rtol=1e-15)
+    assert_allclose(dmp_module.phase(t, 2.5), np.exp(-math.log(100.0) * t / 2.5), rtol=1e-15)
+
+
+# ----------------------------------------------------------------------------------------------
+# Pieces that a correct fallback or a polynomial test path can hide
+
+
+def test_the_banded_gram_matrix_is_the_band_of_the_dense_one():
+    # a wrong band is not positive definite and the fit falls back to lstsq with the right
+    # answer, so the fit's result alone cannot show it: compare the band itself
+    for n, n_basis in [(300, 60), (1000, 200), (500, 26), (400, 25)]:
+        x = np.exp(-dmp_module.ALPHA_X * np.linspace(0.0, 1.0, n))
+        centres, widths = basis_functions(n_basis)
+        start, values = dmp_module._design_band(x, centres, widths)
+        width = values.shape[1]
+        phi = dmp_module._dense(start, values, n_basis)
+        banded = dmp_module._banded_gram(phi, start, width)
+        gram = phi.T @ phi
+        want = np.zeros((width, n_basis))
+        for d in range(width):  # upper band storage: banded[width - 1 - d, i + d] = gram[i, i + d]
+            want[width - 1 - d, d:] = np.diagonal(gram, d)
+        assert_allclose(banded, want, rtol=1e-12, atol=1e-15 * np.abs(gram).max())
+
+
+def test_a_gram_matrix_that_is_not_positive_definite_still_gives_the_ridge_solution():
+    # more basis functions than samples and a vanishing ridge: Cholesky fails, lstsq takes over
+    points = word_like(40, loops=2)
+    lam = 1e-300
+    dmp = fit_dmp(points, n_basis=120, regularisation=lam)
+    phi = _design_for(dmp, 40)
+    with pytest.raises(np.linalg.LinAlgError):
+        np.linalg.cholesky(phi.T @ phi / 40 + lam * np.eye(120))
+    _, targets = forcing_targets(points)
+    expected = np.linalg.lstsq(phi, targets, rcond=None)[0]  # the minimum-norm solution
+    assert_allclose(dmp.weights, expected, rtol=1e-6, atol=1e-9 * np.abs(expected).max())
+
+
+def test_second_differences_are_fourth_order_in_the_interior():
+    # five-point centred stencils: halving the step divides the error of y'' by ~16 (a stencil
+    # off the centre is third order: ~8)
+    errors = []
+    for n in (101, 201):
+        t = np.linspace(0.0, 1.0, n)
+        y = np.column_stack([np.sin(3 * t), np.cos(5 * t)])
+        ydd = np.column_stack([-9 * np.sin(3 * t), -25 * np.cos(5 * t)])
+        x, targets = forcing_targets(y, tau=1.0, stiffness=1.0, damping=0.0)
+        exact = ydd - (y[-1] - y) + np.outer(x, y[-1] - y[0])
+        errors.append(np.abs(targets - exact)[3:-3].max())
+    assert errors[0] / errors[1] > 13.0
+
+
+def test_one_dimensional_and_one_basis_dmps_fit_store_and_restore():
+    t = np.linspace(0.0, 1.0, 200)
+    stroke = (10 * t**3 - 15 * t**4 + 6 * t**5)[:, None] * 4.0  # 1-D, from rest to rest
+    dmp = fit_dmp(stroke)
+    assert dmp.dims == 1 and dmp.tau == 1.0  # the documented default duration
+    assert rmse(rollout(dmp), stroke) < 1e-3
+    single = fit_dmp(stroke, n_basis=1)
+    assert single.n_basis == 1 and single.widths[0] < 1.0
+    for d in (dmp, single):
+        restored = DMP.from_dict(json.loads(json.dumps(d.to_dict())))
+        assert_array_equal(rollout(restored), rollout(d))
+    two = DMP.from_dict({**single.to_dict(), "n_samples": 2})  # the fewest samples a rollout takes
+    assert rollout(two).shape == (2, 1)
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "match"),
+    [
+        ("weights", [[np.nan]], "weights: expected finite"),
+        ("weights", np.zeros((0, 1)), "weights: expected shape"),
+        ("weights", np.zeros((2, 0)), "weights: expected shape"),
+        ("centres", [1.0, 1.0], "centres: expected strictly decreasing"),
+        ("centres", [0.5, 0.9], "centres: expected strictly decreasing"),
+        ("widths", [1.0, 0.0], "widths: expected values > 0"),
+        ("widths", [1.0], r"widths: expected shape \(2,\)"),
+        ("y0", [0.0, 0.0], r"y0: expected shape \(1,\)"),
+        ("goal", [np.inf], "goal: expected finite"),
+        ("tau", 0.0, "tau: expected a number > 0"),
+        ("stiffness", -1.0, "stiffness: expected a number > 0"),
+        ("damping", -0.5, "damping: expected a number >= 0"),
+        ("alpha_x", "fast", "alpha_x: expected a number"),
+        ("n_samples", 1, "n_samples: expected an integer >= 2"),
+    ],
+)
+def test_from_dict_names_every_bad_field(field, value, match):
+    data = fit_dmp(word_like(50, loops=1)[:, :1], n_basis=2).to_dict()
+    with pytest.raises(ValueError, match=match):
+        DMP.from_dict({**data, field: value})
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"stiffness": 0.0}, "stiffness: expected a number > 0"),
+        ({"damping": -1.0}, "damping: expected a number >= 0"),
+        ({"alpha_x": -2.0}, "alpha_x: expected a number > 0"),
+        ({"width_factor": 0.0}, "width_factor: expected a number > 0"),
+    ],
+)
+def test_bad_dynamics_constants_are_named_by_the_fit_and_the_targets(kwargs, match):
+    points = word_like(50, loops=1)
+    with pytest.raises(ValueError, match=match):
+        fit_dmp(points, **kwargs)
+    if "width_factor" not in kwargs:
+        with pytest.raises(ValueError, match=match):
+            forcing_targets(points, **kwargs)
+    with pytest.raises(ValueError, match="tau: expected a number > 0"):
+        forcing_targets(points, tau=-1.0)
+
+
+def test_basis_count_accepts_its_smallest_bounds_and_names_bad_ones():
+    assert basis_count(1, per_100_points=10, minimum=1, maximum=1) == 1
+    assert basis_count(3, per_100_points=10, minimum=1) == 1
+    with pytest.raises(ValueError, match="n_points: expected an integer >= 1"):
+        basis_count(0)
+    with pytest.raises(ValueError, match="minimum: expected an integer >= 1"):
+        basis_count(10, minimum=0)
+
+
+def test_the_design_band_is_centred_on_each_samples_largest_activation():
+    # the documented shortcut: 2 * _BAND + 1 columns around the nearest centre (a wrong band
+    # would fall back to the dense matrix, which is right but not what is documented)
+    band = dmp_module._BAND
+    x = np.exp(-dmp_module.ALPHA_X * np.linspace(0.0, 1.0, 1500))
+    for n_basis in (200, 500, 1000):  # (with 60 the columns outside are not negligible)
+        centres, widths = basis_functions(n_basis)
+        start, values = dmp_module._design_band(x, centres, widths)
+        assert values.shape == (1500, 2 * band + 1)
+        peak = design_matrix(x, centres, widths).argmax(axis=1)
+        inner = (peak >= band) & (peak < n_basis - band)
+        assert inner.mean() > 0.8
+        assert_array_equal(start[inner] + band, peak[inner])
+        assert np.all(start >= 0) and np.all(start + 2 * band + 1 <= n_basis)
+
+
+def test_every_array_of_a_new_dmp_is_read_only():
+    dmp = fit_dmp(word_like(60, loops=1), n_basis=5)
+    for name in ("weights", "y0", "goal", "centres", "widths"):
+        arr = getattr(dmp, name)
+        assert arr.dtype == np.float64
+        with pytest.raises(ValueError, match="read-only"):
+            arr[0] = 1.0
+
+
+def test_bad_basis_and_damping_values_are_named():
+    with pytest.raises(ValueError, match="n_basis: expected an integer >= 1"):
+        basis_functions(0)
+    with pytest.raises(ValueError, match="alpha_x: expected a number > 0"):
+        basis_functions(5, alpha_x=0.0)
+    with pytest.raises(ValueError, match="damping: expected a finite number"):
+        fit_dmp(word_like(50, loops=1), damping=np.nan)

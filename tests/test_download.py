@@ -161,6 +161,47 @@ def test_interrupted_transfer_leaves_nothing(server: Server, tmp_path: Path) -> 
     assert os.listdir(tmp_path) == []
 
 
+@pytest.mark.parametrize("route", ["/file.bin", "/nolength"], ids=["announced", "unannounced"])
+def test_a_body_over_the_size_limit_is_refused_and_leaves_nothing(
+    server: Server, tmp_path: Path, route: str
+) -> None:
+    """Announced (Content-Length) or not, a body over max_bytes is refused, naming the limit."""
+    dest = tmp_path / "file.bin"
+    dest.write_bytes(b"old")
+    limit = len(PAYLOAD) - 1
+    with pytest.raises(DownloadError, match=f"more than the limit of {limit} bytes"):
+        download(server.url(route), dest, sha(PAYLOAD), progress=False, max_bytes=limit)
+    assert dest.read_bytes() == b"old"
+    assert os.listdir(tmp_path) == ["file.bin"]
+    download(server.url(route), dest, sha(PAYLOAD), progress=False, max_bytes=len(PAYLOAD))
+    assert dest.read_bytes() == PAYLOAD  # exactly at the limit is fine
+
+
+def test_a_killed_download_s_temporary_file_is_removed_by_the_next(
+    server: Server, tmp_path: Path
+) -> None:
+    import subprocess
+    import sys
+
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    (tmp_path / f".file.bin.tmp-{dead.pid}").write_bytes(b"half a download")
+    download(server.url("/file.bin"), tmp_path / "file.bin", sha(PAYLOAD), progress=False)
+    assert os.listdir(tmp_path) == ["file.bin"]
+
+
+def test_a_zip_member_larger_than_a_uji_file_is_refused(tmp_path: Path, monkeypatch) -> None:
+    from prg.data import download as module
+
+    archive = tmp_path / "uji.zip"
+    archive.write_bytes(UJI_ZIP)
+    dest = tmp_path / "ujipenchars2.txt"
+    monkeypatch.setattr(module, "MAX_EXTRACT_BYTES", len(FIXTURE.read_bytes()) - 1)
+    with pytest.raises(UsageError, match="more than the"):
+        module.extract_uji(archive, dest)
+    assert sorted(os.listdir(tmp_path)) == ["uji.zip"]
+
+
 def test_http_404(server: Server, tmp_path: Path) -> None:
     with pytest.raises(DownloadError, match=r"/nothing-here failed: HTTP 404"):
         download(server.url("/nothing-here"), tmp_path / "x.bin", None, progress=False)

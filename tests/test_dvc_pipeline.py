@@ -38,6 +38,13 @@ def test_dvc_repro_prepare_equals_prg_prepare_and_is_idempotent(tmp_path):
     repo = _small_repo(tmp_path)
     first = _dvc(repo, "repro", "prepare")
     assert first.returncode == 0, first.stdout + first.stderr
+    # core.autostage is off: dvc stages nothing in git, it says what to add
+    staged = subprocess.run(
+        ["git", "status", "--porcelain"], cwd=repo, capture_output=True, text=True
+    )
+    assert "dvc.lock" in staged.stdout
+    assert not [line for line in staged.stdout.splitlines() if line[:1] not in (" ", "?")]
+    assert "git add" in first.stdout and "dvc.lock" in first.stdout, first.stdout
     by_dvc = repo / "data/prepared/synthetic"
 
     direct_root = tmp_path / "direct"

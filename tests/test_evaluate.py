@@ -240,13 +240,13 @@ BAD = [
     (["models_dir={root}/nowhere"], "does not exist"),
     (["+checkpoints.muse={root}/models/cvae/model.ckpt"], "holds a cvae model, not muse"),
     (["+checkpoints.a={root}/models/muse/metrics.json"], "not a readable checkpoint"),
-    (["likelihood.k_marginal=0"], "k_marginal must be an integer >= 1"),
-    (["likelihood.k_conditional=many"], "k_conditional must be an integer >= 1"),
+    (["likelihood.k_marginal=0"], "likelihood.k_marginal must be an integer in [1, "),
+    (["likelihood.k_conditional=many"], "likelihood.k_conditional must be an integer in [1, "),
     (["families=[cvae]", "likelihood.cells=[logp_I]"], "cvae cannot estimate log p(x_I)"),
     (["likelihood.cells=[logp_X]"], "likelihood.cells"),
     (["parts=[plots]"], "parts"),
     (["coherence.temperatures.mean=-1"], "temperatures.mean"),
-    (["likelihood.traj_std=0"], "likelihood.traj_std must be null (each model's own) or > 0"),
+    (["likelihood.traj_std=0"], "likelihood.traj_std must be a finite number in (0, 100] or null"),
 ]
 
 

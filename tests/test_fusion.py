@@ -188,3 +188,27 @@ def test_gaussian_samples_have_the_stated_moments_and_temperature_scales_spread(
     assert_allclose(z.std(0).numpy(), [0.5, 2.0, 1.0], rtol=0.01)
     z_cold = q.sample(200_000, temperature=0.5)
     assert_allclose(z_cold.std(0).numpy(), [0.25, 1.0, 0.5], rtol=0.01)
+
+
+def test_kls_sum_over_the_last_dimension_of_batched_shapes():
+    # (K, B, d) as the importance sampler uses them: the sum must run over d only
+    g = torch.Generator().manual_seed(8)
+    mu_q, lv_q, mu_p, lv_p = (torch.randn(3, 4, 5, generator=g) for _ in range(4))
+    qn, pn = Normal(mu_q, (0.5 * lv_q).exp()), Normal(mu_p, (0.5 * lv_p).exp())
+    torch.testing.assert_close(kl_normal(mu_q, lv_q, mu_p, lv_p), kl_divergence(qn, pn).sum(-1))
+    torch.testing.assert_close(
+        kl_standard_normal(mu_q, lv_q), kl_divergence(qn, Normal(0.0, 1.0)).sum(-1)
+    )
+    want = (kl_divergence(qn, pn) + kl_divergence(pn, qn)).sum(-1)
+    torch.testing.assert_close(symmetric_kl(mu_q, lv_q, mu_p, lv_p), want)
+
+
+def test_reparameterise_without_noise_draws_standard_normal_noise_scaled_by_sigma():
+    mu = torch.tensor([1.0, -2.0, 0.5]).expand(100_000, 3)
+    logvar = torch.log(torch.tensor([0.25, 4.0, 1.0])).expand(100_000, 3)
+    torch.manual_seed(3)
+    z = reparameterise(mu, logvar)
+    torch.manual_seed(3)
+    torch.testing.assert_close(z, mu + logvar.exp().sqrt() * torch.randn(100_000, 3))
+    assert_allclose(z.mean(0).numpy(), [1.0, -2.0, 0.5], atol=0.03)
+    assert_allclose(z.std(0).numpy(), [0.5, 2.0, 1.0], rtol=0.02)

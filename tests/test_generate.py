@@ -92,7 +92,7 @@ def test_a_word_is_laid_out_connected_and_reproduced_by_one_dmp():
 
 
 def test_inputs_must_match_the_letters():
-    with pytest.raises(UsageError, match="image inputs: 2 given for the 3 letters"):
+    with pytest.raises(UsageError, match=r"images= gives 2 letters but the text .* has 3 letters"):
         write_word(MUSE().eval(), "abc", {"image": torch.rand(2, 1, 28, 28)})
 
 

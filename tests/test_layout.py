@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import re
 
 import numpy as np
 import pytest
@@ -137,3 +138,96 @@ def test_word_breaks_mark_pairs_separated_by_spaces():
     assert word_breaks("ab cd") == [False, True, False]
     assert word_breaks("  a  b ") == [True]
     assert word_breaks("x") == []
+
+
+# ---- non-default parameters ------------------------------------------------------------------
+# The tests above use LayoutParams(); a formula that reads a default where it should read the
+# parameter is invisible there. Here every field differs from its default and the expected boxes
+# come from the rules of the module docstring, written out below.
+
+CUSTOM = [
+    LayoutParams(
+        letter_height=2.3,
+        x_height=0.62,
+        descender=0.3,
+        max_width=1.1,
+        gap=0.35,
+        space_width=0.9,
+        ascenders="bdhkl",
+        descenders="gjpqyz",
+    ),
+    LayoutParams(
+        letter_height=0.8,
+        x_height=0.4,
+        descender=0.6,
+        max_width=2.4,
+        gap=0.0,
+        space_width=0.25,
+        ascenders="bdfhkltz",
+        descenders="fgy",
+    ),
+]
+
+
+def expected_band(char: str, p: LayoutParams) -> tuple[float, float]:
+    full = char.isupper() or char.isdigit() or char in p.ascenders
+    top = p.letter_height * (1.0 if full else p.x_height)
+    bottom = -p.descender * p.letter_height if char in p.descenders else 0.0
+    return bottom, top
+
+
+@pytest.mark.parametrize("params", CUSTOM, ids=["tall-narrow", "short-wide"])
+def test_non_default_parameters_give_the_documented_bands_sizes_and_spacing(params):
+    text = "Bat fizz  yq7 Ltd"
+    chars = [c for c in text if c != " "]
+    aspects = [0.3, 0.8, 1.5, 2.7, 4.0]  # some wider than max_width allows
+    letters = [letter(20 + i, aspect=aspects[i % len(aspects)]) for i in range(len(chars))]
+    placed = layout_letters(letters, text, params)
+    assert len(placed) == len(chars)
+    right = None
+    spaces = [len(m.group(1)) for m in re.finditer(r"( *)[^ ]", text)]  # before each letter
+    gaps = [params.gap + params.space_width * n for n in spaces]
+    for k, (char, pts, out) in enumerate(zip(chars, letters, placed)):
+        bottom, top = expected_band(char, params)
+        assert letter_band(char, params) == pytest.approx((bottom, top))
+        w, h = np.ptp(pts, axis=0)
+        scale = min((top - bottom) / h, params.max_width * params.letter_height / w)
+        x0, y0, x1, y1 = box(out)
+        assert (y0, y1 - y0, x1 - x0) == pytest.approx((bottom, h * scale, w * scale), rel=1e-12)
+        # the shape is only scaled (aspect kept) and translated
+        np.testing.assert_allclose(out - out[0], (pts - pts[0]) * scale, atol=1e-12)
+        want_left = 0.0 if right is None else right + gaps[k]
+        assert x0 == pytest.approx(want_left, abs=1e-12)
+        right = x1
+
+
+def test_a_custom_ascender_set_replaces_the_default_one():
+    p = LayoutParams(ascenders="a", descenders="")
+    assert letter_band("a", p) == pytest.approx((0.0, p.letter_height))
+    assert letter_band("t", p) == pytest.approx((0.0, p.x_height * p.letter_height))
+    assert letter_band("g", p) == pytest.approx((0.0, p.x_height * p.letter_height))
+
+
+def test_zero_gap_descender_and_space_width_are_allowed():
+    p = LayoutParams(gap=0.0, descender=0.0, space_width=0.0)  # documented as >= 0
+    placed = layout_letters([letter(1), letter(2), letter(3)], "g a b", p)
+    boxes = [box(q) for q in placed]
+    assert boxes[0][1] == pytest.approx(0.0)  # no descender depth
+    for (_, _, right, _), (left, _, _, _) in itertools.pairwise(boxes):
+        assert left == pytest.approx(right)  # no gap, and spaces add nothing
+
+
+def test_malformed_characters_and_letters_are_refused():
+    for bad in ("ab", "", "!"):
+        with pytest.raises(UsageError, match="unsupported character"):
+            letter_band(bad)
+    for shape in [(3, 3), (0, 2), (4,)]:
+        with pytest.raises(UsageError, match="must have shape"):
+            place_letter(np.ones(shape), "a", 0.0)
+
+
+def test_letters_x_at_either_end_of_the_text_are_laid_out():
+    # only spaces are stripped from the ends of the text
+    placed = layout_letters([letter(4), letter(5), letter(6)], " Xa X ")
+    assert len(placed) == 3
+    assert box(placed[0])[0] == pytest.approx(0.0)

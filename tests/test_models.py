@@ -664,6 +664,7 @@ def test_imputing_moves_a_label_posterior_and_only_muse_imputes():
         }
         expected = muse.top_posterior(codes)
         assert torch.allclose(once.mu, expected.mu, atol=1e-5)
+        assert torch.allclose(once.logvar, expected.logvar, atol=1e-5)
         assert not torch.allclose(once.mu, plain.mu)
         generated = muse.generate({"label": labels}, "traj", impute_steps=1)[0]
         assert torch.allclose(generated, muse.decode(once.mu, "traj"), atol=1e-5)
@@ -676,3 +677,206 @@ def test_imputing_moves_a_label_posterior_and_only_muse_imputes():
     for bad in (-1, 1.5, True):
         with pytest.raises(UsageError, match="impute_steps must be an integer >= 0"):
             muse.generate({"label": labels}, "traj", impute_steps=bad)
+
+
+# ---- every field of a posterior, and the variance in use ---------------------------------------
+# A test that looks at a posterior's mean (or only at its shape) cannot see a log-variance that is
+# dropped or replaced. These compare every returned field against the networks' own outputs and
+# every loss term against torch.distributions, replaying the model's random draws with the same
+# seed (the latent noise is drawn with torch.randn_like, in the order the terms are computed).
+
+
+def _normal(mu: torch.Tensor, logvar: torch.Tensor) -> Normal:
+    return Normal(mu, (0.5 * logvar).exp())
+
+
+def _kl_prior(mu: torch.Tensor, logvar: torch.Tensor) -> torch.Tensor:
+    return kl_divergence(_normal(mu, logvar), Normal(0.0, 1.0)).sum(-1)
+
+
+def _sym_kl(a: tuple, b: tuple) -> torch.Tensor:
+    qa, qb = _normal(*a), _normal(*b)
+    return (kl_divergence(qa, qb) + kl_divergence(qb, qa)).sum(-1)
+
+
+def _product(experts: list[tuple[torch.Tensor, torch.Tensor]]) -> tuple[torch.Tensor, torch.Tensor]:
+    """Product of the experts and N(0, I), folded pairwise in variance form (not the code's
+    precision form): var = v1 v2 / (v1 + v2), mean = (m1 v2 + m2 v1) / (v1 + v2)."""
+    mean, var = torch.zeros_like(experts[0][0]), torch.ones_like(experts[0][0])
+    for m2, lv2 in experts:
+        v2 = lv2.exp()
+        mean, var = (mean * v2 + m2 * var) / (var + v2), var * v2 / (var + v2)
+    return mean, var.log()
+
+
+def _log_lik(modality: str, params: torch.Tensor, x: torch.Tensor, std: float) -> torch.Tensor:
+    if modality == "traj":
+        return Normal(params, std).log_prob(x).sum(-1)
+    if modality == "label":
+        return torch.distributions.Categorical(logits=params).log_prob(x)
+    bern = torch.distributions.Bernoulli(logits=params, validate_args=False)
+    return bern.log_prob(x).flatten(1).sum(-1)
+
+
+def _close(got: torch.Tensor, want: torch.Tensor, name: str) -> None:
+    torch.testing.assert_close(got, want, rtol=1e-4, atol=1e-4, msg=name)
+
+
+@pytest.mark.parametrize("family", ["avae_ts", "avae_ti"])
+def test_avae_encode_returns_the_whole_posterior_of_the_given_modality(family):
+    model = make_model(family)
+    for m in FAMILIES[family][1]:
+        x = make_batch(5, seed=3, modalities=(m,))[m]
+        mu, logvar = model.encoders[m](x)
+        q = model.encode({m: x})
+        torch.testing.assert_close(q.mu, mu, rtol=0, atol=0)
+        torch.testing.assert_close(q.logvar, logvar, rtol=0, atol=0)
+        assert logvar.std() > 1e-3  # a real, input-dependent variance
+
+
+def test_cvae_encode_returns_the_whole_posterior_of_trajectory_and_label():
+    model = make_model("cvae")
+    batch = make_batch(5, seed=3, modalities=("traj", "label"))
+    onehot = torch.nn.functional.one_hot(batch["label"], 62).float()
+    mu, logvar = model.encoder(torch.cat([batch["traj"], onehot], -1))
+    q = model.encode(batch)
+    torch.testing.assert_close(q.mu, mu, rtol=0, atol=0)
+    torch.testing.assert_close(q.logvar, logvar, rtol=0, atol=0)
+
+
+@pytest.mark.parametrize(("family", "target", "given", "dim"), PATHS)
+def test_importance_path_proposal_is_the_whole_posterior(family, target, given, dim):
+    model = make_model(family).eval()
+    data = make_batch(3, seed=2)
+    with torch.no_grad():
+        path = model.importance_path(target, data[target], {m: data[m] for m in given})
+        if family == "cvae":
+            want = model.encode({"traj": data["traj"], "label": data["label"]})
+            want = (want.mu, want.logvar)
+        elif not given:  # the marginal: the target's own (bottom) encoder
+            want = model.encoders[target](data[target])
+        else:
+            q = model.encode({m: data[m] for m in given})
+            want = (q.mu, q.logvar)
+    torch.testing.assert_close(path.proposal.mu, want[0], rtol=0, atol=0)
+    torch.testing.assert_close(path.proposal.logvar, want[1], rtol=0, atol=0)
+
+
+@pytest.mark.parametrize("family", list(GENERATE_FROM))
+@pytest.mark.parametrize("temperature", [1.0, 0.4])
+def test_generate_draws_latents_with_the_posterior_spread_times_temperature(family, temperature):
+    model = make_model(family).eval()
+    with torch.no_grad():  # untrained heads give logvar ~ 0, which hides a dropped variance
+        for name, module in model.named_modules():
+            if name.endswith("logvar"):
+                module.bias.fill_(-2.0)
+    source = GENERATE_FROM[family]
+    inputs = make_batch(3, seed=4, modalities=(source,))
+    if family != "cvae":  # the CVAE's label-only posterior is the prior N(0, I)
+        assert model.encode(inputs).logvar.max() < -1.0
+    torch.manual_seed(11)
+    out = model.generate(inputs, "traj", n=5, temperature=temperature)
+    with torch.no_grad():
+        q = model.encode(inputs)
+        torch.manual_seed(11)
+        eps = torch.randn((5, *q.mu.shape))
+        z = q.mu + (0.5 * q.logvar).exp() * temperature * eps  # (5, 3, d)
+        context = {source: inputs[source].repeat(5, *([1] * (inputs[source].dim() - 1)))}
+        want = model.decode(z.reshape(-1, z.shape[-1]), "traj", context).reshape(5, 3, 200)
+    _close(out, want, "generated trajectories")
+
+
+def test_cvae_elbo_terms_match_torch_distributions():
+    model = make_model("cvae", kl_weight=0.3, traj_std=0.2)
+    batch = make_batch(6, seed=5, modalities=("traj", "label"))
+    torch.manual_seed(7)
+    terms = model.elbo(batch)
+    with torch.no_grad():
+        onehot = torch.nn.functional.one_hot(batch["label"], 62).float()
+        mu, logvar = model.encoder(torch.cat([batch["traj"], onehot], -1))
+        torch.manual_seed(7)
+        z = mu + (0.5 * logvar).exp() * torch.randn_like(mu)
+        params = model.decoder(torch.cat([z, onehot], -1))
+        rec = -_log_lik("traj", params, batch["traj"], 0.2).mean()
+        kl = _kl_prior(mu, logvar).mean()
+    want = {"rec_traj": rec, "kl": kl, "loss": rec + 0.3 * kl, "elbo": -(rec + kl)}
+    assert set(terms) == set(want)
+    for name, value in want.items():
+        _close(terms[name].detach(), value, name)
+
+
+@pytest.mark.parametrize("family", ["avae_ts", "avae_ti"])
+def test_avae_elbo_terms_match_torch_distributions(family):
+    modalities = FAMILIES[family][1]
+    weights = {modalities[0]: 0.7, modalities[1]: 1.9}
+    model = make_model(family, alpha=2.5, weights=weights, traj_std=0.15)
+    batch = make_batch(6, seed=5, modalities=modalities)
+    torch.manual_seed(8)
+    terms = model.elbo(batch)
+    want: dict[str, torch.Tensor] = {}
+    with torch.no_grad():
+        posts = {m: model.encoders[m](batch[m]) for m in modalities}
+        torch.manual_seed(8)
+        eps = torch.randn_like(posts[modalities[0]][0])  # one draw shared by the two VAEs
+        loss = 0.0
+        for m, (mu, logvar) in posts.items():
+            z = mu + (0.5 * logvar).exp() * eps
+            want[f"rec_{m}"] = -_log_lik(m, model.decoders[m](z), batch[m], 0.15).mean()
+            want[f"kl_{m}"] = _kl_prior(mu, logvar).mean()
+            loss = loss + weights[m] * (want[f"rec_{m}"] + want[f"kl_{m}"])
+        want["skl"] = _sym_kl(posts[modalities[0]], posts[modalities[1]]).mean()
+        want["loss"] = loss + 2.5 * want["skl"]
+    assert set(terms) == set(want)
+    for name, value in want.items():
+        _close(terms[name].detach(), value, name)
+
+
+def test_muse_elbo_terms_match_torch_distributions_and_a_hand_product_of_experts():
+    lambdas, alphas = {"traj": 2.0, "label": 7.0, "image": 0.5}, {"traj": 0.3, "label": 1.5}
+    gammas = {"traj": 3.0, "label": 0.2, "image": 4.0}
+    model = make_model(
+        "muse", lambdas=lambdas, alphas=alphas, gammas=gammas, beta=0.6, delta=2.2, traj_std=0.3
+    )
+    model.top_scale = 0.4
+    alphas = {**alphas, "image": 1.0}  # the default of the one left out
+    batch = make_batch(6, seed=9)
+    torch.manual_seed(12)
+    terms = model.elbo(batch)
+    want: dict[str, torch.Tensor] = {}
+    with torch.no_grad():
+        torch.manual_seed(12)
+        loss, codes = 0.0, {}
+        for m in ALL:
+            mu, logvar = model.encoders[m](batch[m])
+            z = mu + (0.5 * logvar).exp() * torch.randn_like(mu)
+            want[f"rec_{m}"] = -_log_lik(m, model.decoders[m](z), batch[m], 0.3).mean()
+            want[f"kl_{m}"] = _kl_prior(mu, logvar).mean()
+            loss = loss + lambdas[m] * want[f"rec_{m}"] + alphas[m] * want[f"kl_{m}"]
+            codes[m] = z
+        experts = {m: model.top_experts[m](codes[m]) for m in ALL}
+        q_all = _product(list(experts.values()))
+        c = q_all[0] + (0.5 * q_all[1]).exp() * torch.randn_like(q_all[0])
+        for m in ALL:
+            want[f"top_rec_{m}"] = (model.top_decoders[m](c) - codes[m]).pow(2).sum(-1).mean()
+            loss = loss + gammas[m] * want[f"top_rec_{m}"]
+        want["top_kl"] = _kl_prior(*q_all).mean()
+        subsets = [s for r in (1, 2) for s in combinations(ALL, r)]
+        want["subset_skl"] = torch.stack(
+            [_sym_kl(_product([experts[m] for m in s]), q_all).mean() for s in subsets]
+        ).mean()
+        want["loss"] = loss + 0.4 * (0.6 * want["top_kl"] + 2.2 * want["subset_skl"])
+    assert set(terms) == set(want)
+    for name, value in want.items():
+        _close(terms[name].detach(), value, name)
+
+
+def test_muse_posteriors_of_every_subset_are_the_hand_product_of_their_experts():
+    model = make_model("muse").eval()
+    batch = make_batch(4, seed=6)
+    with torch.no_grad():
+        for subset in SUBSETS:
+            q = model.encode({m: batch[m] for m in subset})
+            experts = [model.top_experts[m](model.encoders[m](batch[m])[0]) for m in subset]
+            mu, logvar = _product(experts)
+            _close(q.mu, mu, f"mu of {subset}")
+            _close(q.logvar, logvar, f"logvar of {subset}")

@@ -175,15 +175,15 @@ def test_a_failed_training_stops_the_others_and_fails_with_one_line(tmp_path, sm
         "--families",
         "cvae,muse",
         "--train-set",
-        "cvae:model.module.optimizer.lr=-1",  # Adam refuses it once training starts
+        "cvae:model.module.optimizer.lr=-1",  # prg-train refuses it (prg.checks), exit 2
         "--train-set",
         "muse:trainer.max_epochs=100000",  # would run far longer than this test
     )
     elapsed = time.monotonic() - start
-    assert result.returncode == 1, result.stdout[-3000:] + result.stderr
+    assert result.returncode == 2, result.stdout[-3000:] + result.stderr
     (line,) = result.stderr.splitlines()
-    assert line.startswith("prg.paper_scale: error: train: cvae failed (exit 1): ")
-    assert "ValueError: Invalid learning rate: -1" in line
+    assert line.startswith("prg.paper_scale: error: train: cvae failed (exit 2): ")
+    assert "model.module.optimizer.lr must be a finite number in (0, 10], got -1" in line
     assert "stopped muse" in line and f"log: {root / 'logs' / 'train-cvae.log'}" in line
     assert elapsed < 120
     survivors = []
@@ -196,7 +196,8 @@ def test_a_failed_training_stops_the_others_and_fails_with_one_line(tmp_path, sm
     assert survivors == []
     assert not (root / "reports" / "table1.md").exists()
     assert not (root / "models" / "cvae" / "model.ckpt").exists()
-    timings = json.loads((root / "reports" / "paper_scale.json").read_text())
+    assert not (root / "reports" / "paper_scale.json").exists()  # only complete runs' records
+    timings = json.loads((root / "logs" / "paper_scale.json").read_text())
     assert timings["status"].startswith("failed: train: cvae failed")
     assert "evaluate" not in timings["stages"]
     assert set(timings["stages"]["train"]["jobs"]) == {"cvae", "muse", "classifiers"}

@@ -58,7 +58,7 @@ BAD_INPUTS = [
     (["data=mnist"], "mnist"),
     (["data.augment.per_class=-5"], "per_class"),
     (["data.synthetic.n_writers=0"], "n_writers"),
-    (["data.splits.train=2"], "sum to 1"),
+    (["data.splits.train=0.9"], "sum to 1"),
     (["data.no_such_key=1"], "no_such_key"),
     (["data=uji"], "data.uji_path"),
     (["data=uji", "data.uji_path=/no/such/file.txt"], "no such file"),

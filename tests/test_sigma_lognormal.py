@@ -324,3 +324,53 @@ def test_fit_never_raises_nor_returns_non_finite_values(seed, n, kind):
     if result.n_components:
         _check_fit(points, t, result)
     assert np.all(np.isfinite(result.start)) and np.isfinite(result.snr_db)
+
+
+# ----------------------------------------------------------------------------------------------
+# Non-default arguments (a formula reading a default instead of its argument is invisible at the
+# default; these use other values and independent properties)
+# ----------------------------------------------------------------------------------------------
+
+
+def test_fit_judges_success_and_stops_by_the_given_low_target():
+    rng = np.random.default_rng(21)
+    below_default = 0
+    for name in ("c", "s", "v", "z", "w"):
+        points = jittered(name, rng)
+        t = sl.power_law_timestamps(points)
+        low = sl.fit(points, t, snr_target_db=10.0)
+        snr = sl.snr_db(points, sl.trajectory(low.params, t, low.start))
+        assert low.snr_db == pytest.approx(snr, rel=1e-12)
+        assert low.success and snr >= 10.0
+        assert low.message == "target SNR reached"
+        default = sl.fit(points, t)
+        assert low.n_components <= default.n_components  # stops as soon as 10 dB are met
+        below_default += snr < 20.0
+    assert below_default >= 3  # measured 5 of 5: success here is judged against 10, not 20
+
+
+@pytest.mark.parametrize(("ramp", "floor", "total"), [(0.25, 0.5, 3.0), (0.05, 0.1, 0.4)])
+def test_timestamps_ramp_from_the_given_floor_over_the_given_fraction(ramp, floor, total):
+    # a straight line, evenly spaced: the curvature is clipped to one value everywhere, so the
+    # speed is the cruise speed times the envelope alone
+    n = 2001
+    line = np.column_stack([np.linspace(0.0, 2.0, n), np.linspace(0.0, 1.0, n)])
+    t = sl.power_law_timestamps(line, total_time=total, ramp=ramp, ramp_floor=floor)
+    assert t[0] == 0.0 and t[-1] == pytest.approx(total, rel=1e-12)
+    s_mid = (np.arange(n - 1) + 0.5) / (n - 1)  # arc-length fraction at each segment
+    speed = 1.0 / np.diff(t)  # equal segments: proportional to the speed
+    inner = (s_mid > ramp + 1e-3) & (s_mid < 1 - ramp - 1e-3)
+    cruise = speed[inner].mean()
+    np.testing.assert_allclose(speed[inner], cruise, rtol=1e-9)  # full speed inside the ramps
+    outer = (s_mid < ramp - 1e-3) | (s_mid > 1 - ramp + 1e-3)
+    assert np.all(speed[outer] < cruise * (1 - 1e-6))  # slower within `ramp` of either end
+    assert speed[0] / cruise == pytest.approx(floor, abs=2e-3)  # from `floor` x cruise
+    assert speed[-1] / cruise == pytest.approx(floor, abs=2e-3)
+
+
+def test_timestamps_default_to_unit_duration_and_handle_two_points():
+    pts = jittered("s", np.random.default_rng(2))
+    t = sl.power_law_timestamps(pts)
+    assert t[0] == 0.0 and t[-1] == pytest.approx(1.0, rel=1e-12)  # the documented default
+    np.testing.assert_allclose(sl.power_law_timestamps(pts[:2], total_time=3.0), [0.0, 3.0])
+    np.testing.assert_array_equal(sl.power_law_timestamps(pts[:1]), [0.0])

@@ -306,7 +306,7 @@ def test_overrides_change_nested_settings(tmp_path):
         ("kind=survey", "kind must be one of turing, readability"),
         ("words=[cat, 'two words']", "'two words' is not a word"),
         ("words=[cat, cat]", "'cat' is listed twice"),
-        ("participants=0", "participants must be an integer >= 1"),
+        ("participants=0", "participants must be an integer from 1 to 10000"),
         ("human_writers=3", r"human_writers \(3\) must be at least foils \(4\)"),
         ("equivalence_margin=1.5", "equivalence_margin must be a number in"),
         ("colour=red", "unknown key 'colour'"),
@@ -323,7 +323,7 @@ def test_overrides_change_nested_settings(tmp_path):
             "attention_checks=[{after_trial: 1, instruction: x, expect: {typed_text: a}}]",
             "unknown key 'typed_text'",
         ),
-        ("name=../up", "name must be letters, digits"),
+        ("name=../up", "name must be 1-64 letters, digits"),
         ("words", "must look like key=value"),
     ],
 )
@@ -332,6 +332,87 @@ def test_bad_settings_name_the_key_and_what_is_accepted(override, message):
         load_study(REPO / "conf/study/turing.yaml", [override])
     assert str(err.value).startswith(str(REPO / "conf/study/turing.yaml"))
     assert "\n" not in str(err.value)
+
+
+# A study file (YAML) with one bad setting: each class of nonsense, refused by `prg-study build`
+# with one line naming the setting and what is accepted, exit 2, nothing written.
+FILE_CASES = [
+    # negative or zero counts, rates and durations
+    ("participants", -4, "participants must be an integer from 1 to"),
+    ("human_writers", 0, "human_writers must be an integer from 1 to"),
+    ("alpha", -0.05, "alpha must be a number in"),
+    ("equivalence_margin", 0, "equivalence_margin must be a number in"),
+    ("analysis.equivalence_margin", -0.2, "analysis: equivalence_margin -0.2 is outside"),
+    ("completion.redirect_delay_ms", -1, "redirect_delay_ms must be an integer from 0 to"),
+    ("render.stroke_px", -2.0, "render.stroke_px must be a positive finite number"),
+    # NaN and infinity
+    ("alpha", float("nan"), "alpha must be a number in"),
+    ("analysis.alpha", float("inf"), "analysis: alpha inf is outside"),
+    ("participants", float("nan"), "participants must be an integer"),
+    ("render.stroke_px", float("inf"), "render.stroke_px must be a positive finite number"),
+    ("completion.redirect_delay_ms", float("nan"), "redirect_delay_ms must be an integer"),
+    # canvases and images of no (or absurd) size
+    ("capture.canvas_width", 0, "capture.canvas_width must be an integer from 50 to"),
+    ("capture.canvas_height", 0, "capture.canvas_height must be an integer from 50 to"),
+    ("render.height_px", 0, "render.height_px must be an integer from 1 to"),
+    ("render.supersample", 100, "render.supersample must be an integer from 1 to 8"),
+    # completion and upload URLs: http(s) only, the completion URL with its {code}
+    ("completion.url", "https://example.org/done", "has no {code} placeholder"),
+    ("completion.url", "javascript:alert(1)//{code}", "completion.url must be an http:// or"),
+    ("completion.url", "data:text/html,<b>{code}</b>", "completion.url must be an http:// or"),
+    ("save.post_url", "file:///etc/passwd", "save.post_url must be an http:// or"),
+    ("capture.post_url", "https://", "capture.post_url must be an http:// or"),
+    ("completion.code", "a b&c", "completion.code must be 1-64 letters"),
+    # huge values: refused with the limit
+    ("participants", 10**9, "participants must be an integer from 1 to 10000"),
+    ("seed", 10**30, "seed must be an integer from 0 to"),
+    ("words", [f"w{'a' * (i % 7)}{chr(97 + i % 26)}" for i in range(300)], "1 to 200 words"),
+    ("render.width_px", 10**6, "render.width_px must be an integer from 1 to 4000"),
+    ("foils", 1000, "foils must be an integer from 1 to 9"),
+    # settings of the wrong type or name
+    ("save.download", "maybe", "save.download must be true or false"),
+    ("page.title", 5, "page.title must be text"),
+    ("completion.colour", "red", "completion: unknown key 'colour'"),
+    ("analysis.alhpa", 0.1, "analysis: unknown key 'alhpa'"),
+]
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "message"), FILE_CASES, ids=[f"{k}={str(v)[:20]}" for k, v, _ in FILE_CASES]
+)
+def test_bad_study_files_are_one_line_exit_2_and_build_nothing(
+    key, value, message, tmp_path, capsys
+):
+    import yaml
+
+    from studies.cli import main
+
+    doc = yaml.safe_load((REPO / "conf/study/turing.yaml").read_text())
+    *sections, last = key.split(".")
+    node = doc
+    for section in sections:
+        node = node.setdefault(section, {})
+    node[last] = value
+    study = tmp_path / "study.yaml"
+    study.write_text(yaml.safe_dump(doc))
+    out = tmp_path / "build"
+    assert main(["build", str(study), "--out", str(out), "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"prg-study: error: {study}: "), err
+    assert message in err[0]
+    assert not out.exists()
+
+
+def test_the_trial_limit_is_named_and_the_largest_study_is_accepted():
+    """participants x trials each above MAX_TRIALS is refused with the limit (designing
+    200,000 trials takes about 4 s on one core, 1,000,000 about 18 s)."""
+    from studies.design import MAX_TRIALS
+
+    words = f"words=[{', '.join(f'w{chr(97 + i // 26)}{chr(97 + i % 26)}' for i in range(20))}]"
+    most = MAX_TRIALS // (20 + 1)  # 20 words + the attention check
+    with pytest.raises(UsageError, match=f"is {(most + 1) * 21} trials; at most {MAX_TRIALS}"):
+        load_study(REPO / "conf/study/turing.yaml", [f"participants={most + 1}", words])
+    assert load_study(REPO / "conf/study/turing.yaml", [f"participants={most}", words])
 
 
 def test_readability_needs_an_even_number_of_words():

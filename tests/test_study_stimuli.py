@@ -90,7 +90,7 @@ def test_stroke_width_is_the_same_whatever_the_word_size():
 def test_render_settings_are_checked():
     with pytest.raises(UsageError, match="render: unknown key 'colour'"):
         RenderStyle.from_dict({"colour": "red"})
-    with pytest.raises(UsageError, match=r"render.width_px must be a positive integer"):
+    with pytest.raises(UsageError, match=r"render.width_px must be an integer from 1 to 4000"):
         RenderStyle(width_px=0)
     with pytest.raises(UsageError, match="no room for the word"):
         RenderStyle(height_px=20, margin_px=10)

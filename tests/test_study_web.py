@@ -464,7 +464,7 @@ TURING = "conf/study/turing.yaml"
                 "--set",
                 "render.stroke_px=0",
             ],
-            "render.stroke_px must be a positive number",
+            "render.stroke_px must be a positive finite number",
         ),
         (["build"], "the following arguments are required: config"),
         (["build", TURING, "--bogus"], "unrecognized arguments: --bogus"),

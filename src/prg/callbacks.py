@@ -13,6 +13,8 @@ import lightning as L
 from lightning.pytorch.callbacks import Checkpoint, EarlyStopping, ModelCheckpoint
 from lightning.pytorch.loggers import MLFlowLogger
 
+from prg.atomic import atomic_path
+
 log = logging.getLogger(__name__)
 
 
@@ -62,10 +64,12 @@ class LastCheckpoint(Checkpoint):
         self._saved_step = -1
 
     def save(self, trainer: L.Trainer) -> None:
-        tmp = self.path.with_name(f".{self.FILENAME}.tmp")
-        trainer.save_checkpoint(tmp)  # every rank calls it; the strategy writes on rank 0
         if trainer.is_global_zero:
-            os.replace(tmp, self.path)
+            with atomic_path(self.path) as tmp:
+                # every rank calls it; the strategy writes on rank 0
+                trainer.save_checkpoint(tmp, weights_only=False)
+        else:
+            trainer.save_checkpoint(self.path, weights_only=False)  # writes nothing here
         trainer.strategy.barrier("LastCheckpoint.save")
         self._saved_step = trainer.global_step
 

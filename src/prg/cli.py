@@ -3,11 +3,20 @@
 Every ``prg-*`` command is ``hydra_command(task, config_name, command)``. Before Hydra runs, the
 command line is composed once against ``conf/`` so that an unknown config group, a typo in a key
 or a malformed override is reported as one line with exit code 2 instead of Hydra's multi-line
-message; Hydra's log folder (``paths.log_dir``) is checked there too. Inside the task,
+message, and so is an interpolation that cannot be resolved (``${oc.env:NOPE}``); Hydra's log
+folder (``paths.log_dir``) is checked there too. Each task then checks its numeric options
+against :data:`prg.checks.RANGES` (:func:`prg.checks.check_values`). Inside the task,
 :class:`prg.errors.PRGError` becomes ``<command>: error: <message>`` with its exit code (2 for
 usage errors, 1 for run-time failures); an :class:`OSError` about a file or the disk (no space,
-read-only, permission, I/O error) is a run-time failure naming the path (exit 1); Ctrl-C exits
-with 130. Any other exception is a bug and keeps its traceback.
+read-only, permission, I/O error) is a run-time failure naming the path (exit 1). Any other
+exception is a bug and keeps its traceback.
+
+Signals: SIGINT (Ctrl-C), SIGTERM (``kill``, SLURM, container managers) and SIGHUP end every
+command the same way (:func:`handle_signals`): the work stops, child processes are terminated,
+every output is left as it was before the command (outputs are staged, :mod:`prg.atomic`), and
+one line ``<command>: error: stopped by SIGTERM ...`` is printed with exit code 128 + the signal
+number (130 for SIGINT, 143 for SIGTERM), the shell's convention. A second signal while the
+first is being handled ends the process at once.
 
 Tasks call :func:`check_output` on every output path before they start working, so a path that
 cannot be written is a usage error (exit 2) before anything is computed or written.
@@ -16,14 +25,17 @@ cannot be written is a usage error (exit 2) before anything is computed or writt
 from __future__ import annotations
 
 import errno
+import logging
 import os
 import sys
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
 from prg.errors import PRGError, UsageError
+from prg.signals import Interrupted, raising_signals, stop_children
 
 
 def config_dir() -> Path:
@@ -100,15 +112,83 @@ def compose_config(config_name: str, overrides: list[str], hydra_config: bool = 
         )
 
 
+def _hydra_flags_error(argv: list[str]) -> str | None:
+    """What Hydra's own argument parser would refuse in ``argv`` (it prints its usage, 8 lines,
+    and exits); None when it accepts it."""
+    from hydra._internal.utils import get_args_parser
+
+    parser = get_args_parser()
+
+    def refuse(message: str):
+        raise UsageError(message)
+
+    parser.error = refuse  # argparse's default prints the usage and exits
+    try:
+        _, unknown = parser.parse_known_args(argv)
+    except UsageError as err:
+        return str(err)
+    return f"unknown option {unknown[0]}" if unknown else None
+
+
+def route_library_logs() -> None:
+    """Send the libraries' info banners and warnings to the run's log (Hydra's console handler on
+    stdout and its log file) instead of their own stderr handlers, so that stderr holds only
+    what the user must see: a failed command's one error line.
+
+    Lightning attaches its own stream handlers when it is imported before logging is configured
+    (it is, by our imports); MLflow does so at its import unless told not to.
+    """
+    os.environ.setdefault("MLFLOW_CONFIGURE_LOGGING", "false")
+    logging.getLogger("alembic").setLevel(logging.WARNING)  # MLflow's schema set-up, per run
+    for name in ("lightning", "lightning.pytorch", "lightning.fabric", "mlflow"):
+        library = logging.getLogger(name)
+        for handler in list(library.handlers):
+            if isinstance(handler, logging.StreamHandler) and not isinstance(
+                handler, logging.FileHandler
+            ):
+                library.removeHandler(handler)
+        library.propagate = True
+
+
+def _unresolvable(cfg: Any, overrides: list[str]) -> str | None:
+    """One line for the first interpolation of ``cfg`` that cannot be resolved (``${oc.env:NOPE}``,
+    ``${no.such.key}``), None if all resolve. The keys the user set are tried first, so the line
+    names the option given rather than another that interpolates it."""
+    from omegaconf import OmegaConf
+    from omegaconf.errors import OmegaConfBaseException
+
+    given = [o.partition("=")[0].lstrip("+~") for o in overrides if "=" in o]
+    rest = [k for k in cfg if k != "hydra"]
+    for key in [*given, *rest, "hydra.run.dir"]:
+        try:
+            node = OmegaConf.select(cfg, key, throw_on_missing=False)
+            if OmegaConf.is_config(node):
+                OmegaConf.to_container(node, resolve=True)
+        except OmegaConfBaseException as err:
+            where = err.full_key or key
+            reason = str(getattr(err, "msg", err)).splitlines()[0]
+            reason = reason.replace("KeyError raised while resolving interpolation: ", "")
+            value = OmegaConf.to_container(cfg, resolve=False)
+            for part in where.split("."):
+                value = value.get(part) if isinstance(value, dict) else None
+            shown = f"={value}" if isinstance(value, str) else ""
+            return f"{where}{shown} cannot be resolved: {reason}"
+    return None
+
+
 def _preflight(command: str, config_name: str, argv: list[str]) -> None:
     """Compose the command line once; report a bad override as one line (exit 2).
 
     Also refuses a Hydra log folder (``hydra.run.dir``, under ``paths.log_dir``) that cannot be
     created, which Hydra itself would report with a traceback. Skipped when Hydra's own flags
     are used (``-m`` sweeps are expanded by Hydra, ``--cfg``, ``--help``, ``--config-name`` ...
-    change what is composed).
+    change what is composed); an unknown flag or a bad flag value is refused in one line
+    instead of Hydra's usage text.
     """
     if any(arg.startswith("-") for arg in argv):
+        message = _hydra_flags_error(argv)
+        if message:
+            fail(command, f"{message} (the options are Hydra's: {command} --help)", 2)
         return
     overrides = [
         a
@@ -116,7 +196,7 @@ def _preflight(command: str, config_name: str, argv: list[str]) -> None:
         if a.startswith("hydra.run.dir=") or not a.lstrip("+~").startswith(("hydra.", "hydra/"))
     ]
     try:
-        run_dir = compose_config(config_name, overrides, hydra_config=True).hydra.run.dir
+        cfg = compose_config(config_name, overrides, hydra_config=True)
     except Exception as err:  # Hydra raises several types; all mean a bad override
         message = " ".join(str(err).split())
         cut = message.find("Set the environment variable HYDRA_FULL_ERROR")
@@ -124,10 +204,31 @@ def _preflight(command: str, config_name: str, argv: list[str]) -> None:
         if "LexerNoViableAlt" in message or "mismatched input" in message:
             message += " (a value with spaces, commas or symbols needs Hydra quotes: 'key=\"...\"')"
         fail(command, message, 2)
+    unresolved = _unresolvable(cfg, overrides)
+    if unresolved:
+        fail(command, unresolved, 2)
     try:
-        check_output(run_dir, "Hydra's log folder (paths.log_dir)")
+        check_output(cfg.hydra.run.dir, "Hydra's log folder (paths.log_dir)")
     except UsageError as err:
         fail(command, str(err), 2)
+
+
+@contextmanager
+def handle_signals(command: str) -> Iterator[None]:
+    """Turn SIGINT, SIGTERM and SIGHUP inside the block into one line and exit code 128 + signal.
+
+    Only in the main thread (Python delivers signals there); see :mod:`prg.signals`.
+    """
+    with raising_signals():
+        try:
+            yield
+        except Interrupted as err:
+            stop_children()
+            fail(
+                command,
+                f"stopped by {err}; the outputs of earlier runs are left as they were",
+                128 + err.signum,
+            )
 
 
 def hydra_command(task: Callable[[Any], Any], config_name: str, command: str) -> Callable[[], None]:
@@ -136,6 +237,8 @@ def hydra_command(task: Callable[[Any], Any], config_name: str, command: str) ->
 
     @hydra.main(config_path=str(config_dir()), config_name=config_name, version_base="1.3")
     def _run(cfg) -> None:
+        route_library_logs()
+        logging.captureWarnings(True)  # library warnings to the log too
         try:
             task(cfg)
         except PRGError as err:
@@ -145,23 +248,27 @@ def hydra_command(task: Callable[[Any], Any], config_name: str, command: str) ->
             if message is None:
                 raise
             fail(command, message, 1)
-        except KeyboardInterrupt:
-            fail(command, "interrupted; nothing was written", 130)
+        finally:
+            logging.captureWarnings(False)
 
     def main() -> None:
-        _preflight(command, config_name, sys.argv[1:])
-        _run()
+        with handle_signals(command):
+            _preflight(command, config_name, sys.argv[1:])
+            _run()
 
     return main
 
 
 __all__ = [
+    "Interrupted",
     "PRGError",
     "UsageError",
     "check_output",
     "compose_config",
     "config_dir",
     "fail",
+    "handle_signals",
     "hydra_command",
     "os_error_message",
+    "route_library_logs",
 ]

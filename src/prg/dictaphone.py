@@ -34,9 +34,11 @@ import numpy as np
 from omegaconf import DictConfig, OmegaConf
 from scipy.signal import spectrogram
 
+from prg.atomic import atomic_path, staged_outputs, write_json
+from prg.checks import check_values, literal_words
 from prg.cli import check_output, hydra_command
 from prg.data.alphabet import char_to_label
-from prg.data.build import staged_outputs, write_json
+from prg.data.datamodule import check_model_shapes
 from prg.data.figures import pyplot
 from prg.data.store import load_split
 from prg.errors import UsageError
@@ -100,7 +102,8 @@ def dmp_rmse_mm(word: WordTrajectory, rollout: np.ndarray, params) -> float:
 
 def dictaphone(cfg: DictConfig) -> dict[str, Any]:
     """Task: write every word from speech and from letter images; table, figure, metrics."""
-    words = [clean_text(str(w)) for w in cfg.words]
+    check_values(cfg)
+    words = [clean_text(w, key="words") for w in literal_words(cfg.words, "words")]
     if not words or any(" " in w for w in words):
         raise UsageError(f"words must be a list of single words, got {list(cfg.words)!r}")
     unknown = [c for c in cfg.channels if c not in CHANNELS]
@@ -122,6 +125,8 @@ def dictaphone(cfg: DictConfig) -> dict[str, Any]:
     if "image" in cfg.channels and not test_path.exists():
         raise UsageError(f"test split {test_path} does not exist: run prg-prepare first")
     test = load_split(test_path) if "image" in cfg.channels else None
+    if test is not None:
+        check_model_shapes(test, test_path.parent)
 
     rows, figure_inputs = [], {}
     with staged_outputs(out_dir) as staging:
@@ -290,10 +295,11 @@ def _figure(words: list[str], channels: list[str], items: dict, path: Path) -> N
     axes[1, 0].set_ylabel("output")
     fig.suptitle("Words from sound (x_S) and from letter images (x_I)", fontsize=11)
     fig.tight_layout()
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp, dpi=120)
-    plt.close(fig)
-    tmp.replace(path)
+    try:
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=120)
+    finally:
+        plt.close(fig)
 
 
 def _log_run(cfg: DictConfig, metrics: dict, out_dir: Path) -> None:

@@ -37,9 +37,12 @@ import numpy as np
 import torch
 from omegaconf import DictConfig, OmegaConf
 
+from prg.atomic import staged_outputs, write_json
+from prg.checks import check_values
 from prg.cli import check_output, hydra_command
 from prg.data.alphabet import ALPHABET, NUM_CLASSES
-from prg.data.build import git_commit, staged_outputs, write_json
+from prg.data.build import git_commit
+from prg.data.datamodule import check_model_shapes
 from prg.data.store import load_split
 from prg.errors import UsageError
 from prg.evaluation.classifiers import ensure_classifiers
@@ -191,7 +194,11 @@ def load_models(cfg: DictConfig) -> dict[str, tuple[MultimodalVAE, dict[str, Any
 
 def _test_data(cfg: DictConfig) -> dict[str, torch.Tensor]:
     """The whole test split as model inputs."""
-    arrays = load_split(Path(cfg.paths.data_dir) / "prepared" / cfg.data.name / "test.npz")
+    root = Path(cfg.paths.data_dir) / "prepared" / cfg.data.name
+    arrays = load_split(root / "test.npz")
+    check_model_shapes(arrays, root)
+    if len(arrays["label"]) == 0:
+        raise UsageError(f"dataset split {root / 'test.npz'} is empty: nothing to evaluate")
     return {
         "traj": torch.from_numpy(arrays["traj"]).float(),
         "label": torch.from_numpy(arrays["label"].astype(np.int64)),
@@ -548,6 +555,7 @@ def log_to_mlflow(result: Evaluation, models, cfg: DictConfig) -> str:
 
 def evaluate(cfg: DictConfig) -> Evaluation:
     """Task: run the requested parts on the configured checkpoints and write the reports."""
+    check_values(cfg)
     parts = _check_config(cfg)
     _requested_cells(cfg)
     result = Evaluation()

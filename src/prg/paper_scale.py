@@ -19,6 +19,7 @@ folder (``--root``, default the profile's name), never into the demo's ``models/
     paper/reports/paper_scale.json                   wall time per stage, fit CPU time per
                                                      family, device, settings
     paper/logs/<job>.log                             each process's whole output
+    paper/logs/paper_scale.json                      the record of a failed or stopped run
 
 MLflow runs go to the project's store (``--tracking-uri`` for another) in the experiment
 ``prg-<profile>``; the training runs carry the tag ``prg.experiment=<profile>``, the evaluation
@@ -51,7 +52,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from prg.atomic import write_json
+from prg.cli import handle_signals
 from prg.errors import PRGError, UsageError
+from prg.signals import Interrupted, deferred
 
 COMMAND = "prg.paper_scale"
 FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse")
@@ -68,10 +72,6 @@ _ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
 # Lines not worth a terminal line (still in the log): an advertisement, a warning every epoch.
 _NOISE = ("💡 Tip:", "`weights_only` was not set")
 _ERROR_LINE = re.compile(r"^(prg-\w+: error: |[A-Za-z_][\w.]*(Error|Exception|Interrupt)\b)")
-
-
-class _Stopped(Exception):
-    """SIGTERM or Ctrl-C reached this process."""
 
 
 # ---- options ---------------------------------------------------------------------------------
@@ -351,14 +351,15 @@ def start(job: Job, console: Console) -> None:
     job.log.write_text(f"$ {shlex.join(job.argv)}\n")
     console.say(f"start: {shlex.join(job.argv[2:])}", job.name)
     job.started = time.perf_counter()
-    job.proc = subprocess.Popen(
-        job.argv,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        stdin=subprocess.DEVNULL,
-        env=job.env,
-        start_new_session=True,  # its own process group: stopped as a whole, DataLoader workers too
-    )
+    with deferred():  # a signal here would leave a child that `stop` does not know of
+        job.proc = subprocess.Popen(
+            job.argv,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            stdin=subprocess.DEVNULL,
+            env=job.env,
+            start_new_session=True,  # its own process group: stopped as a whole, workers too
+        )
     job.reader = threading.Thread(target=_pump, args=(job, console), daemon=True)
     job.reader.start()
 
@@ -392,10 +393,10 @@ class StageFailed(PRGError):
 
 def run_stage(stage: str, jobs: list[Job], console: Console, progress_every: float) -> None:
     """Run ``jobs`` concurrently to the end; the first failure stops the others."""
-    for job in jobs:
-        start(job, console)
     last_shown = time.monotonic()
     try:
+        for job in jobs:
+            start(job, console)
         while True:
             pending = [j for j in jobs if j.ended is None]
             for job in pending:
@@ -427,9 +428,10 @@ def run_stage(stage: str, jobs: list[Job], console: Console, progress_every: flo
                         job.shown = job.progress
                         console.say(job.progress, job.name)
             time.sleep(0.2)
-    except (KeyboardInterrupt, _Stopped):
+    except Interrupted:
         stopped = stop(jobs)
-        raise _Stopped(f"{stage}: interrupted; stopped {', '.join(stopped) or 'nothing'}") from None
+        console.say(f"{stage}: interrupted; stopped {', '.join(stopped) or 'nothing'}")
+        raise
 
 
 # ---- the command lines -----------------------------------------------------------------------
@@ -592,15 +594,15 @@ def run(args: argparse.Namespace, console: Console) -> dict[str, Any]:
         timings["fit"] = _fit_costs(root, args.families)  # also the models --skip-train reuses
         _tag_evaluate_run(eval_cfg, args.profile)
         timings["status"] = "ok"
-    except (PRGError, _Stopped) as err:
-        timings["status"] = f"failed: {err}"
-        raise
-    finally:
+    except (PRGError, Interrupted) as err:
+        # the record of a run that did not finish goes beside its logs; the reports folder keeps
+        # the last complete run's
+        failed = isinstance(err, PRGError)
+        timings["status"] = f"failed: {err}" if failed else f"stopped by {err}"
         timings["total_seconds"] = round(time.perf_counter() - begin, 2)
-        report_dir.mkdir(parents=True, exist_ok=True)
-        from prg.data.build import write_json
-
-        write_json(report_dir / "paper_scale.json", timings)
+        write_json(root / "logs" / "paper_scale.json", timings)
+        raise
+    timings["total_seconds"] = round(time.perf_counter() - begin, 2)
     timings["reports"] = {
         name: str(report_dir / f"{name}.md") for name in ("table1", "coherence", "robustness")
     }
@@ -756,11 +758,12 @@ def summary(timings: dict[str, Any], root: Path, report_dir: Path) -> str:
 
 def main(argv: list[str] | None = None) -> None:
     console = Console()
+    # `make`, a scheduler or Ctrl-C stopping us: the training jobs are stopped too (run's stop)
+    with handle_signals(COMMAND):
+        _main(argv, console)
 
-    def _on_term(signum, frame):  # `make` or a scheduler stopping us: stop the children too
-        raise _Stopped("terminated")
 
-    signal.signal(signal.SIGTERM, _on_term)
+def _main(argv: list[str] | None, console: Console) -> None:
     try:
         args = parse_args(sys.argv[1:] if argv is None else argv)
         timings = run(args, console)
@@ -771,9 +774,6 @@ def main(argv: list[str] | None = None) -> None:
     except PRGError as err:
         print(f"{COMMAND}: error: {err}", file=sys.stderr, flush=True)
         sys.exit(err.exit_code)
-    except (KeyboardInterrupt, _Stopped) as err:
-        print(f"{COMMAND}: error: {err or 'interrupted'}", file=sys.stderr, flush=True)
-        sys.exit(130)
 
 
 if __name__ == "__main__":

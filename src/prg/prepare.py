@@ -11,18 +11,19 @@ from __future__ import annotations
 
 import json
 import logging
-from pathlib import Path
 
 from omegaconf import DictConfig
 
+from prg.checks import check_values
 from prg.cli import check_output, hydra_command
-from prg.data.build import BuildResult, build_dataset, dataset_metrics, write_json
+from prg.data.build import BuildResult, build_dataset
 
 log = logging.getLogger(__name__)
 
 
 def prepare(cfg: DictConfig) -> BuildResult:
     """Task: build ``${paths.data_dir}/prepared/${data.name}/`` from the composed config."""
+    check_values(cfg)
     check_output(cfg.paths.data_dir, "paths.data_dir")
     if cfg.get("metrics_path"):
         check_output(cfg.metrics_path, "metrics_path", folder=False)
@@ -32,6 +33,7 @@ def prepare(cfg: DictConfig) -> BuildResult:
         workers=cfg.get("workers", 2),
         progress=cfg.get("progress", True),
         figures=cfg.get("figures", True),
+        metrics_path=cfg.get("metrics_path") or None,
     )
     counts = result.manifest["counts"]
     log.info(
@@ -40,9 +42,6 @@ def prepare(cfg: DictConfig) -> BuildResult:
         ", ".join(f"{s} {c['total']} samples / {c['writers']} writers" for s, c in counts.items()),
     )
     log.info("stage timings (s): %s", json.dumps(result.timings))
-    if cfg.get("metrics_path"):
-        Path(cfg.metrics_path).parent.mkdir(parents=True, exist_ok=True)
-        write_json(cfg.metrics_path, dataset_metrics(result.manifest))
     return result
 
 

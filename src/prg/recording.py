@@ -58,11 +58,11 @@ Reading back
 from __future__ import annotations
 
 import colorsys
+import errno
 import io
 import logging
 import os
 import time
-import uuid
 import wave
 from collections import defaultdict
 from collections.abc import Iterator, Sequence
@@ -73,6 +73,7 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
+from prg.atomic import atomic_path
 from prg.errors import UsageError
 from prg.pipeline.word import WordTrajectory
 
@@ -132,25 +133,26 @@ def recording_stream(
         If the file cannot be created (one line naming ``path``).
     """
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
     rec = rr.RecordingStream(application_id, recording_id=recording_id)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        rec.save(tmp, default_blueprint=blueprint)
-    except (OSError, RuntimeError) as err:
-        tmp.unlink(missing_ok=True)
+    except OSError as err:
         raise UsageError(f"{path}: cannot write the recording ({err})") from None
-    try:
-        yield rec
-        rec.flush()
-        rec.disconnect()
-        os.replace(tmp, path)
-    except BaseException:
+    with atomic_path(path) as tmp:
         try:
-            rec.disconnect()
+            rec.save(tmp, default_blueprint=blueprint)
+        except (OSError, RuntimeError) as err:
+            raise UsageError(f"{path}: cannot write the recording ({err})") from None
+        try:
+            yield rec
+            try:
+                rec.flush()
+            except RuntimeError as err:  # rerun's file writer failed (a full disk, a size limit)
+                raise OSError(
+                    errno.EIO, f"the recording could not be written ({err})", tmp
+                ) from err
         finally:
-            tmp.unlink(missing_ok=True)
-        raise
+            rec.disconnect()  # closes the file before it is renamed or removed
     log.debug("wrote recording %s", path)
 
 

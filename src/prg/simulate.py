@@ -34,8 +34,9 @@ from typing import Any
 import numpy as np
 from omegaconf import DictConfig, OmegaConf, open_dict
 
+from prg.atomic import staged_outputs, write_json
+from prg.checks import check_values
 from prg.cli import check_output, hydra_command
-from prg.data.build import staged_outputs, write_json
 from prg.errors import UsageError
 from prg.pipeline.word import WordTrajectory
 
@@ -123,6 +124,7 @@ def simulate(cfg: DictConfig) -> tuple[Any, Path]:
     """
     from prg.sim import simulate_word
 
+    check_values(cfg)
     channels = [c for c in CHANNELS if cfg.get(c) is not None]
     if cfg.word is not None and channels:
         raise UsageError(

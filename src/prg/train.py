@@ -19,7 +19,6 @@ per epoch, at the epoch's last step, so the run's history has each epoch once (s
 
 from __future__ import annotations
 
-import json
 import logging
 import os
 import shutil
@@ -32,9 +31,11 @@ import lightning as L
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
+from prg.atomic import staged_outputs, write_json
+from prg.checks import check_values
 from prg.cli import check_output, hydra_command
-from prg.data.build import git_commit, write_json
-from prg.data.datamodule import PRGDataModule
+from prg.data.build import git_commit
+from prg.data.datamodule import PRGDataModule, read_manifest
 from prg.errors import UsageError
 from prg.models.checkpoint import read_checkpoint
 from prg.models.module import PRGModule
@@ -111,7 +112,7 @@ def _manifest(cfg: DictConfig) -> tuple[dict[str, Any], str]:
         raise UsageError(
             f"no prepared dataset at {path.parent}: run `prg-prepare data={cfg.data.name}` first"
         )
-    return json.loads(path.read_text()), file_sha256(path)
+    return read_manifest(path.parent), file_sha256(path)
 
 
 def _resolve_ckpt_path(cfg: DictConfig) -> str | None:
@@ -140,6 +141,7 @@ def train(cfg: DictConfig) -> TrainResult:
 
 
 def _train(cfg: DictConfig) -> TrainResult:
+    check_values(cfg)
     _check_modalities(cfg)
     _check_numbers(cfg)
     manifest, manifest_hash = _manifest(cfg)
@@ -165,6 +167,7 @@ def _train(cfg: DictConfig) -> TrainResult:
         num_workers=cfg.data.loader.num_workers,
         seed=cfg.seed,
     )
+    datamodule.setup("fit")  # now: a dataset the model cannot take fails before any run starts
     module_cfg = OmegaConf.to_container(cfg.model.module, resolve=True)
     module: PRGModule = _build(module_cfg, "model", _recursive_=False)
 
@@ -216,20 +219,19 @@ def _train(cfg: DictConfig) -> TrainResult:
 
 
 def _export(folder: Path, best: str, metrics: dict[str, float], run_id: str, cfg) -> None:
-    """Copy the best checkpoint to ``<folder>/model.ckpt`` and write ``metrics.json`` (DVC)."""
-    folder.mkdir(parents=True, exist_ok=True)
-    tmp = folder / ".model.ckpt.tmp"
-    shutil.copyfile(best, tmp)
-    os.replace(tmp, folder / "model.ckpt")
-    write_json(
-        folder / "metrics.json",
-        {
-            "family": cfg.model.name,
-            "mlflow_run_id": run_id,
-            "seed": cfg.seed,
-            **{k.replace("/", "_"): round(v, 4) for k, v in sorted(metrics.items())},
-        },
-    )
+    """Copy the best checkpoint to ``<folder>/model.ckpt`` and write ``metrics.json`` (DVC);
+    both are complete before either replaces the previous export."""
+    with staged_outputs(folder) as staging:
+        shutil.copyfile(best, staging / "model.ckpt")
+        write_json(
+            staging / "metrics.json",
+            {
+                "family": cfg.model.name,
+                "mlflow_run_id": run_id,
+                "seed": cfg.seed,
+                **{k.replace("/", "_"): round(v, 4) for k, v in sorted(metrics.items())},
+            },
+        )
 
 
 main = hydra_command(train, "train", "prg-train")

@@ -33,8 +33,9 @@ import numpy as np
 import torch
 from omegaconf import DictConfig, OmegaConf
 
+from prg.atomic import staged_outputs
+from prg.checks import check_text_length, check_values, literal_text, literal_words
 from prg.cli import check_output, hydra_command
-from prg.data.build import staged_outputs
 from prg.errors import UsageError
 from prg.models.checkpoint import load_model
 from prg.pipeline.connect import ConnectionParams
@@ -84,7 +85,7 @@ def image_inputs(path: str | os.PathLike) -> torch.Tensor:
             raise UsageError(f"images folder {path} holds no {'/'.join(IMAGE_SUFFIXES)} files")
         letters = [load_image(f) for f in files]
     else:
-        letters = segment_word_image(load_image(path))
+        letters = segment_word_image(load_image(path), name=f"images={path}")
     return torch.from_numpy(perceive_letter_images(letters))
 
 
@@ -116,20 +117,41 @@ def trajectory_inputs(path: str | os.PathLike) -> torch.Tensor:
     return torch.from_numpy(perceive_trajectories(arrays, y_down=y_down))
 
 
+MAX_LEXICON_BYTES = 1_000_000  # a word list, not a dictionary dump: about 100,000 words
+
+
+def read_lexicon(path: Path) -> list[str]:
+    """The words of a lexicon file: UTF-8 text, one word (or short phrase) per line."""
+    hint = "give a text file with one word per line, or a list: speech.lexicon=[bell,cat]"
+    try:
+        if path.stat().st_size > MAX_LEXICON_BYTES:
+            raise UsageError(
+                f"speech.lexicon {path}: {path.stat().st_size:,} bytes; accepted are word lists "
+                f"up to {MAX_LEXICON_BYTES:,} bytes"
+            )
+        text = path.read_bytes().decode("utf-8")
+    except OSError as err:
+        raise UsageError(
+            f"speech.lexicon {path}: not a readable word list ({err.strerror}); {hint}"
+        ) from None
+    except UnicodeDecodeError as err:
+        raise UsageError(
+            f"speech.lexicon {path}: not UTF-8 text (byte {err.start}); {hint}"
+        ) from None
+    if any(ord(c) < 32 and c not in "\t\r\n" for c in text):
+        raise UsageError(f"speech.lexicon {path}: holds control characters, not text; {hint}")
+    return [w for w in text.splitlines() if w.strip()]
+
+
 def speech_params_from_config(cfg: DictConfig) -> SpeechParams:
     """The ``speech`` settings as :class:`SpeechParams`; ``lexicon`` may name a text file of
     words (one per line)."""
     settings = OmegaConf.to_container(cfg.speech, resolve=True)
     lexicon = settings.get("lexicon")
     if isinstance(lexicon, str):
-        path = Path(lexicon)
-        try:
-            settings["lexicon"] = [w for w in path.read_text().splitlines() if w.strip()]
-        except OSError as err:
-            raise UsageError(
-                f"speech.lexicon {path}: not a readable word list ({err.strerror}); give a "
-                "text file with one word per line, or a list: speech.lexicon=[bell,cat]"
-            ) from None
+        settings["lexicon"] = read_lexicon(Path(lexicon))
+    elif lexicon is not None:
+        settings["lexicon"] = literal_words(lexicon, "speech.lexicon")
     try:
         return SpeechParams(**settings)
     except TypeError as err:
@@ -140,7 +162,7 @@ def speech_input(audio: str | os.PathLike, settings: SpeechParams) -> dict[str, 
     """phi_S on a sound file: its 16 kHz samples (for the recording) and the transcript."""
     from prg.pipeline.speech import load_audio, perceive_speech
 
-    samples = load_audio(audio)
+    samples = load_audio(audio, max_seconds=settings.max_seconds)
     _, transcript = perceive_speech(audio, settings)
     log.info("heard %r (%s) in %.2f s", transcript.word, transcript.backend, transcript.seconds)
     return {"samples": samples, "transcript": transcript}
@@ -148,7 +170,9 @@ def speech_input(audio: str | os.PathLike, settings: SpeechParams) -> dict[str, 
 
 def write(cfg: DictConfig) -> tuple[WordTrajectory, Path]:
     """Task: generate the word and save it, its renderings and its DMP rollout."""
-    text = None if cfg.text is None else str(cfg.text).strip()
+    check_values(cfg)
+    text = literal_text(cfg.text, "text")
+    text = None if text is None else text.strip()
     if cfg.text is not None and not text:
         raise UsageError("text is empty: give the word to write, e.g. text=hello")
     if text is not None and cfg.audio is not None:
@@ -180,6 +204,7 @@ def write(cfg: DictConfig) -> tuple[WordTrajectory, Path]:
     if text is None:
         text = infer_text(model, inputs, params.impute_steps)
         log.info("read %r from the images", text)
+        check_text_length(text, "the word read from images=/trajectories=")
     check_inputs(text, inputs)
     letters = decode_letters(model, inputs, params.temperature, params.seed, params.impute_steps)
     word, path = compose_word(letters, text, params)

@@ -277,8 +277,15 @@ def _turing_verdict(tests: pd.DataFrame, c: float, margin: float, neutral: float
                 f"({_p(gee_tost['p_value'])})."
             )
     else:
-        verdict.update(h1="not estimable")
-        lines.append("**H1**: not estimable from these data (see the tests table).")
+        why = _reasons(gee, fallback)
+        exact = _row(tests, "exact binomial test vs chance")
+        seen = (
+            f" Observed rate {_ci(exact)} (exact interval; trials treated as independent)."
+            if exact is not None and np.isfinite(exact["estimate"])
+            else ""
+        )
+        verdict.update(h1="not estimable", h1_reason=why)
+        lines.append(f"**H1**: not estimable from these data: {why}.{seen}")
     h2p = _row(tests, f"one-sample t-test vs {neutral:g} on participant means")
     if _ok(h2p):
         m = float(h2p["estimate"])
@@ -306,8 +313,32 @@ def _turing_verdict(tests: pd.DataFrame, c: float, margin: float, neutral: float
                     f"{_p(h2p['p_value'])} (two-sided): the conclusions differ."
                 )
     else:
-        verdict.update(h2="not estimable")
+        why = _reasons(h2p)
+        verdict.update(h2="not estimable", h2_reason=why)
+        rank = _row(tests, f"Wilcoxon signed-rank vs {neutral:g} on participant means")
+        lines.append(
+            f"**H2**: not estimable by the t-test on participant means: {why}."
+            + (
+                f" The signed-rank test on the same means: {rank['conclusion']}."
+                if _ok(rank)
+                else ""
+            )
+        )
     return verdict, lines, contrasts
+
+
+def _reasons(*rows: pd.Series | None) -> str:
+    """Why the tests in ``rows`` could not be run, from their conclusions (``not estimable: ...``)."""
+    out = []
+    for r in rows:
+        if r is None:
+            continue
+        text = str(r["conclusion"]) if isinstance(r["conclusion"], str) else "no result"
+        text = text.removeprefix("not estimable: ")
+        item = f"{r['test']}: {text}"
+        if item not in out:
+            out.append(item)
+    return "; ".join(out) or "no test could be run"
 
 
 def analyze_readability(data: pd.DataFrame, cfg: AnalysisConfig) -> StudyAnalysis:
@@ -424,7 +455,9 @@ def analyze_readability(data: pd.DataFrame, cfg: AnalysisConfig) -> StudyAnalysi
             "the observed difference": abs(float(diff["estimate"])),
         }
     warnings = S.margin_warnings(margin, cfg.margin_source, cands)
-    verdict, conclusions, contrasts = _readability_verdict(tests, margin, a)
+    verdict, conclusions, contrasts = _readability_verdict(
+        tests, margin, a, S.rates_by(data, "correct", "writer", a)
+    )
     return StudyAnalysis(
         READABILITY,
         margin,
@@ -442,7 +475,9 @@ def analyze_readability(data: pd.DataFrame, cfg: AnalysisConfig) -> StudyAnalysi
     )
 
 
-def _readability_verdict(tests: pd.DataFrame, margin: float, a: float):
+def _readability_verdict(
+    tests: pd.DataFrame, margin: float, a: float, rates: pd.DataFrame | None = None
+):
     diff = _row(tests, "paired t-test by participant (robot - human)")
     tost = _row(tests, f"paired TOST by participant (±{margin:g})")
     ni = _row(tests, f"non-inferiority by participant (margin {margin:g})")
@@ -450,13 +485,25 @@ def _readability_verdict(tests: pd.DataFrame, margin: float, a: float):
     lines, contrasts = [], []
     how = "paired by participant"
     if not _ok(diff):  # e.g. a between-participants file: fall back on the GEE
+        paired = diff
         diff = _row(tests, "GEE difference (robot - human)")
         tost = _row(tests, f"GEE TOST (±{margin:g})")
         ni = _row(tests, f"GEE non-inferiority (margin {margin:g})")
-        how = "GEE on participants; too few participants read both writers for the paired tests"
+        how = f"GEE on participants; the paired tests are not estimable ({_reasons(paired)})"
         if not _ok(diff):
-            verdict.update(verdict="not estimable")
-            lines.append("**Readability**: not estimable from these data (see the tests table).")
+            why = _reasons(paired, diff)
+            verdict.update(verdict="not estimable", reason=why)
+            seen = ""
+            if rates is not None and len(rates):
+                seen = (
+                    " Observed success rates: "
+                    + ", ".join(
+                        f"{r.writer} {r.rate:.3f} ({1 - a:.0%} Wilson CI {r.ci_low:.3f} to {r.ci_high:.3f})"
+                        for r in rates.itertuples(index=False)
+                    )
+                    + "."
+                )
+            lines.append(f"**Readability**: not estimable from these data: {why}.{seen}")
             return verdict, lines, contrasts
     d = float(diff["estimate"])
     equiv = bool(_ok(tost) and tost["reject"])
@@ -520,6 +567,18 @@ def _analyze(resp: Responses, cfg: AnalysisConfig) -> Analysis:
     studies = []
     att = attention_summary(resp.frame)
     for kind in resp.kinds:
+        if (
+            kind == TURING
+            and not 0
+            < cfg.chance - cfg.margin_for(TURING)
+            < cfg.chance + cfg.margin_for(TURING)
+            < 1
+        ):
+            raise UsageError(
+                f"chance {cfg.chance:g} ± the turing equivalence margin {cfg.margin_for(TURING):g} "
+                "must stay inside (0, 1): the margin (--margin or the study's equivalence_margin) "
+                "must be below both chance (--chance) and 1 - chance"
+            )
         frame = resp.frame[resp.frame["study"] == kind]
         used, ex_notes = analysis_rows(
             frame,

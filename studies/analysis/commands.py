@@ -21,15 +21,19 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import sys
 from pathlib import Path
 
+from prg.atomic import atomic_path
 from prg.cli import check_output
 from prg.errors import UsageError
 
 KINDS = ("turing", "readability")
+MAX_SIMULATED_ROWS = 1_000_000  #: about 20 s and 100 MB of CSV
+MAX_SIMULATED_WORDS = 1_000
 
 
 def _rate(value: str) -> float:
@@ -39,6 +43,16 @@ def _rate(value: str) -> float:
         raise argparse.ArgumentTypeError(f"{value!r} is not a number") from None
     if not (math.isfinite(x) and 0 < x < 1):
         raise argparse.ArgumentTypeError(f"{value} is outside (0, 1)")
+    return x
+
+
+def _difference(value: str) -> float:
+    try:
+        x = float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{value!r} is not a number") from None
+    if not (math.isfinite(x) and -1 < x < 1):
+        raise argparse.ArgumentTypeError(f"{value} is outside (-1, 1) (a difference of rates)")
     return x
 
 
@@ -138,7 +152,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--difference",
-        type=float,
+        type=_difference,
         nargs="+",
         help="readability: true robot minus human (default 0 0.05)",
     )
@@ -237,7 +251,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=0,
         help="extra participants who answer at random and fail the checks",
     )
-    s.add_argument("--seed", type=int, default=0)
+    s.add_argument("--seed", type=_count, default=0)
     s.add_argument(
         "--out",
         required=True,
@@ -403,16 +417,9 @@ def run_power(args: argparse.Namespace) -> int:
 def _write_files(*pairs) -> None:
     """``path, write(tmp_path), path, write(tmp_path) ...``: every file written under a
     temporary name first, then all renamed; a failure leaves none of them half-written."""
-    paths = [Path(p) for p in pairs[::2]]
-    temps = [p.with_name(f".{p.name}.tmp") for p in paths]
-    try:
-        for tmp, write in zip(temps, pairs[1::2], strict=True):
-            write(tmp)
-        for tmp, path in zip(temps, paths, strict=True):
-            tmp.replace(path)
-    finally:
-        for tmp in temps:
-            tmp.unlink(missing_ok=True)
+    with contextlib.ExitStack() as stack:
+        for path, write in zip(pairs[::2], pairs[1::2], strict=True):
+            write(stack.enter_context(atomic_path(path)))
 
 
 def _words(args: argparse.Namespace) -> list[str]:
@@ -423,8 +430,8 @@ def _words(args: argparse.Namespace) -> list[str]:
         text = args.words.strip()
         if text.isdigit():
             n = int(text)
-            if n < 2:
-                raise UsageError(f"--words {text}: give at least 2 words")
+            if not 2 <= n <= MAX_SIMULATED_WORDS:
+                raise UsageError(f"--words {text}: give 2 to {MAX_SIMULATED_WORDS} words")
             base = list(DEFAULT_WORDS)
             return (
                 base[:n]
@@ -432,9 +439,10 @@ def _words(args: argparse.Namespace) -> list[str]:
                 else base + [f"word{i:02d}" for i in range(len(base) + 1, n + 1)]
             )
         words = [w.strip() for w in text.split(",") if w.strip()]
-        if len(words) < 2 or len(set(words)) != len(words):
+        if not 2 <= len(words) <= MAX_SIMULATED_WORDS or len(set(words)) != len(words):
             raise UsageError(
-                f"--words {args.words!r}: give at least 2 different comma-separated words"
+                f"--words: give 2 to {MAX_SIMULATED_WORDS} different comma-separated words, "
+                f"got {len(words)}" + (" (some twice)" if len(set(words)) != len(words) else "")
             )
         return words
     if args.study:
@@ -456,6 +464,13 @@ def run_simulate(args: argparse.Namespace) -> int:
     check_output(out, "--out", folder=False)
     check_output(out.with_suffix(".truth.json"), "--out (its truth file)", folder=False)
     words = _words(args)
+    rows = (args.participants + args.inattentive) * (len(words) + args.attention_checks)
+    if rows > MAX_SIMULATED_ROWS:
+        raise UsageError(
+            f"--participants {args.participants} (+ --inattentive {args.inattentive}) x "
+            f"{len(words)} words (+ --attention-checks {args.attention_checks}) is {rows} rows; "
+            f"at most {MAX_SIMULATED_ROWS}"
+        )
     common = dict(
         icc=args.icc,
         word_icc=args.word_icc,

@@ -146,6 +146,8 @@ def config_from_mapping(node: dict[str, Any], path: str = "config") -> AnalysisC
     if isinstance(words, str):
         words = [w for w in words.replace(",", " ").split() if w]
     exclude = node.get("exclude_failed_attention", True)
+    if not isinstance(exclude, bool):
+        raise UsageError(f"{path}: exclude_failed_attention must be true or false, got {exclude!r}")
     return AnalysisConfig(
         kind=kind,
         name=str(node["name"]) if node.get("name") is not None else None,

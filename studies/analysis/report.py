@@ -21,16 +21,14 @@ from __future__ import annotations
 import base64
 import html
 import json
-import os
 import re
-import shutil
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from prg.atomic import staged_folder
 from prg.errors import UsageError
 from studies.analysis.analyze import Analysis, StudyAnalysis
 from studies.analysis.schema import TURING
@@ -425,7 +423,12 @@ def _study1_section(doc: Doc, st: StudyAnalysis) -> None:
         "Per word: robot picks k of n, rate with 95 % Wilson CI, exact two-sided binomial test vs chance (Holm-adjusted over words).",
     )
     icc = st.icc.set_index("value")
-    if "chose_robot" in icc.index:
+    if "chose_robot" in icc.index and not np.isfinite(icc.loc["chose_robot"].icc):
+        doc.p(
+            "The ICC of the 0/1 answers is not estimable from these data (every answer the same, "
+            "or fewer than 2 participants), so neither is the design effect."
+        )
+    elif "chose_robot" in icc.index:
         r = icc.loc["chose_robot"]
         doc.p(
             f"Answers cluster within participants: the ICC of the 0/1 answers is {_num(r.icc)} "
@@ -683,8 +686,7 @@ def write_report(analysis: Analysis, out: str | Path, *, paper: bool = True) -> 
 
     reproduced = reproduce_paper() if paper else None
     doc = build_report(analysis, reproduced)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
-    try:
+    with staged_folder(out) as tmp:
         (tmp / "figures").mkdir()
         for b in doc.blocks:
             if b[0] == "fig":
@@ -732,16 +734,6 @@ def write_report(analysis: Analysis, out: str | Path, *, paper: bool = True) -> 
             "warnings": [w for st in analysis.studies for w in st.warnings],
         }
         (tmp / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n", encoding="utf-8")
-        old = None
-        if out.exists():
-            old = out.with_name(f".{out.name}.old-{os.getpid()}")
-            out.rename(old)
-        tmp.rename(out)
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     return out
 
 

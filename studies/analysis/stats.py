@@ -99,6 +99,22 @@ def _fmt_p(p: float) -> str:
     return f"p = {p:.2g}" if p < 0.001 else f"p = {p:.3f}"
 
 
+def _no_spread(x: np.ndarray, every: str) -> str:
+    """Why a t statistic cannot be formed from ``x`` ("" when it can): fewer than 2 values, or no
+    spread (every value the same, up to round-off), where t = (mean - m) / 0 is not a test."""
+    if len(x) < 2:
+        return f"needs at least 2 values, got {len(x)}"
+    if _constant(x):
+        return f"{every} is {float(np.mean(x)):.3g} (zero variance: no t-test or interval)"
+    return ""
+
+
+def _constant(x: np.ndarray) -> bool:
+    """Every value of ``x`` the same, up to round-off (e.g. rates 1/3 and 2/6)."""
+    x = np.asarray(x, dtype=float)
+    return len(x) == 0 or float(np.ptp(x)) <= 1e-12 * max(1.0, float(np.max(np.abs(x))))
+
+
 # --------------------------------------------------------------------------- paper-faithful
 
 
@@ -287,13 +303,30 @@ def one_sample_ttest(
         x = means.to_numpy()
         unit, n_clusters = f"{_unit(cluster)} means", len(x)
     n = len(x)
+    null = {"greater": "<=", "less": ">=", "two-sided": "="}[alternative]
+    name = f"one-sample t-test vs {popmean:g} on {unit}"
+    why = _no_spread(x, f"every {unit[:-1] if unit.endswith('s') else unit}")
+    if why:
+        return tests_frame(
+            [
+                dict(
+                    test=name,
+                    null_hypothesis=f"mean {null} {popmean:g}",
+                    n=n,
+                    clusters=n_clusters,
+                    estimate=float(np.mean(x)) if n else np.nan,
+                    alpha=alpha,
+                    conclusion=f"not estimable: {why}",
+                    method="scipy ttest_1samp not run",
+                )
+            ]
+        )
     res = stats.ttest_1samp(x, popmean, alternative=alternative)
     mean = float(np.mean(x))
-    se = float(np.std(x, ddof=1) / math.sqrt(n)) if n > 1 else np.nan
-    q = stats.t.ppf(1 - alpha / 2, n - 1) if n > 1 else np.nan
+    se = float(np.std(x, ddof=1) / math.sqrt(n))
+    q = stats.t.ppf(1 - alpha / 2, n - 1)
     p = float(res.pvalue)
     reject = bool(p < alpha)
-    null = {"greater": "<=", "less": ">=", "two-sided": "="}[alternative]
     if reject:
         side = ">" if mean > popmean else "<"
         conclusion = f"mean {mean:.2f} {side} {popmean:g} ({_fmt_p(p)})"
@@ -304,7 +337,7 @@ def one_sample_ttest(
     return tests_frame(
         [
             dict(
-                test=f"one-sample t-test vs {popmean:g} on {unit}",
+                test=name,
                 null_hypothesis=f"mean {null} {popmean:g}",
                 n=n,
                 clusters=n_clusters,
@@ -359,7 +392,27 @@ def group_ttest(
         )
     a = rates.loc[levels[0]].to_numpy()
     b = rates.loc[levels[1]].to_numpy()
-    res = stats.ttest_ind(b, a, equal_var=equal_var)
+    if _constant(a) and _constant(b):
+        diff = float(b.mean() - a.mean())
+        return tests_frame(
+            [
+                dict(
+                    test=f"independent t-test on {unit} rates ({levels[1]} - {levels[0]})",
+                    null_hypothesis=f"{levels[1]} rate = {levels[0]} rate",
+                    n=len(a) + len(b),
+                    estimate=diff,
+                    alpha=alpha,
+                    conclusion=(
+                        f"not estimable: every {levels[0]} {unit} rate is {a.mean():.3g} and every "
+                        f"{levels[1]} {unit} rate is {b.mean():.3g} (zero variance: no t-test or interval)"
+                    ),
+                    method="scipy ttest_ind not run",
+                )
+            ]
+        )
+    with warnings.catch_warnings():  # one group constant (a word everyone read) is fine
+        warnings.filterwarnings("ignore", "Precision loss", RuntimeWarning)
+        res = stats.ttest_ind(b, a, equal_var=equal_var)
     diff = float(b.mean() - a.mean())
     if equal_var:
         dof = len(a) + len(b) - 2
@@ -678,12 +731,18 @@ def paired_tests(
         f" ({dropped} dropped: one level only)" if dropped else ""
     )
     sd = float(np.std(d, ddof=1)) if n > 1 else np.nan
-    if n < 3 or not sd > 0:
-        why = "fewer than 3 pairs" if n < 3 else "every paired difference is the same"
+    if n < 3 or _constant(d):
+        why = (
+            "fewer than 3 pairs"
+            if n < 3
+            else f"every {unit}'s paired difference is {d[0]:.3g} (zero variance: no t-test or interval)"
+        )
         return tests_frame(
             [
                 dict(
                     test=f"paired t-test by {unit} ({label})",
+                    null_hypothesis=f"{label} = 0",
+                    estimate=float(d.mean()) if n else np.nan,
                     conclusion=f"not estimable: {why}",
                     method=note,
                     **base,
@@ -794,8 +853,22 @@ def gee_difference(
             raise ValueError(f"needs answers from at least 2 {_unit(cluster)}s")
         if x.min() == x.max():
             raise ValueError(f"only one {condition} level present")
+        fixed = {lv: float(y[x == i][0]) for i, lv in enumerate(levels) if _constant(y[x == i])}
+        if len(fixed) == 2:  # the sandwich SE is 0: a Wald test would divide by it
+            base["estimate"] = fixed[levels[1]] - fixed[levels[0]]
+            raise ValueError(
+                f"every answer is {y[0]:g} (no variation: the robust SE is 0)"
+                if _constant(y)
+                else f"every {levels[1]} answer is {fixed[levels[1]]:g} and every {levels[0]} "
+                f"answer is {fixed[levels[0]]:g} (perfect separation: the robust SE is 0)"
+            )
         exog = np.column_stack([np.ones_like(x), x])
         res, cov, rho, notes = _gee_fit(y, exog, groups, sm.families.Gaussian())
+        for lv, v in fixed.items():
+            notes.append(
+                f"every {lv} answer is {v:g}: the robust SE takes that rate as known exactly "
+                "(interval too narrow; prefer the paired tests)"
+            )
         d, se = float(res.params[1]), float(res.bse[1])
         if not (np.isfinite(se) and se > 0):
             raise ValueError("no finite standard error (all answers identical?)")
@@ -973,7 +1046,7 @@ def mixed_logit(
     if len(frame) < 10 or not groups:
         return failed("too few rows or clusters for a mixed model")
     if frame["_y"].nunique() < 2:
-        return failed("every answer is the same")
+        return failed(f"every answer is {frame['_y'].iloc[0]:g}, so the log-odds are infinite")
     n_levels = sum(len(levels) for _, _, levels in groups)
     if n_levels > max_levels:
         return failed(
@@ -987,6 +1060,12 @@ def mixed_logit(
         from scipy import sparse
 
         exog = dmatrix(fixed, frame, return_type="dataframe")
+        separated = _separated_cell(frame, exog, fixed)
+        if separated:
+            return failed(
+                f"separation: {separated}, so the fixed effects' log-odds are infinite "
+                "(a fit would report its prior, not the data)"
+            )
         # one indicator column per participant and per word, built sparse (never dense)
         blocks, ident = [], []
         for k, (_, codes, levels) in enumerate(groups):
@@ -1054,6 +1133,20 @@ def mixed_logit(
             )
         )
     return pd.DataFrame(rows)[list(MIXED_COLUMNS)]
+
+
+def _separated_cell(frame: pd.DataFrame, exog: pd.DataFrame, fixed: str) -> str:
+    """How the 0/1 outcome ``frame["_y"]`` is separated by the fixed-effects design ``exog``
+    ("" when it is not): the answers of one cell of the design (one writer, say) all the same.
+    For the categorical designs fitted here a constant cell is exactly (quasi-)separation."""
+    cells = frame["_y"].groupby([exog[c].to_numpy() for c in exog.columns], sort=False)
+    named = [c for c in frame.columns if c != "_y" and c in fixed]
+    for _, y in cells:
+        if y.nunique() == 1:
+            first = frame.loc[y.index[0]]
+            what = " ".join(str(first[c]) for c in named)
+            return f"every {what + ' ' if what else ''}answer is {y.iloc[0]:g}"
+    return ""
 
 
 def margin_warnings(

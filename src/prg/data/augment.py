@@ -32,6 +32,7 @@ Rules
 from __future__ import annotations
 
 import multiprocessing
+import signal
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
@@ -206,12 +207,28 @@ def _draw_chunk(
 def _worker_init() -> None:
     """Single-threaded BLAS in each worker: the small dense solves of the fit gain nothing from
     threads, and ``workers`` processes with a thread per core each oversubscribe the CPU (about
-    1.4x slower measured on 2 cores). Uses threadpoolctl when it is installed."""
+    1.4x slower measured on 2 cores). Uses threadpoolctl when it is installed.
+
+    Ctrl-C reaches the whole process group: a worker ignores it, the main process stops the pool.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         from threadpoolctl import threadpool_limits
     except ImportError:  # optional: without it the workers keep the default thread count
         return
     threadpool_limits(limits=1, user_api="blas")
+
+
+def _stop_pool(pool: ProcessPoolExecutor) -> None:
+    """Terminate the pool's workers and wait for them to end (``shutdown`` alone would wait for
+    the running tasks to finish; Python 3.14 names this ``terminate_workers``)."""
+    terminate = getattr(pool, "terminate_workers", None)
+    if terminate is not None:
+        terminate()
+        return
+    for process in list((pool._processes or {}).values()):  # no public way before 3.14
+        process.terminate()
+    pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _pool_context() -> multiprocessing.context.BaseContext:
@@ -377,9 +394,13 @@ def augment(
             sizes.append(len(rows))
         with tqdm(total=len(draw_rows), desc="draw samples", disable=not progress) as bar:
             drawn = _run_tasks(_draw_chunk, tasks, pool, bar, sizes)
-    finally:
+    except BaseException:
+        if pool is not None:  # a failure or a signal: don't wait for the running fits
+            _stop_pool(pool)
+        raise
+    else:
         if pool is not None:
-            pool.shutdown(wait=True, cancel_futures=True)
+            pool.shutdown(wait=True)
 
     redraws = copies = 0
     lo = 0

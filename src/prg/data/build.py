@@ -7,14 +7,12 @@ failed build leaves the previous dataset (or nothing) — never a half-written o
 
 from __future__ import annotations
 
-import json
+import contextlib
 import logging
 import os
-import shutil
 import subprocess
 import time
-from collections.abc import Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -23,6 +21,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 import prg
+from prg.atomic import atomic_path, json_text, staged_folder, write_json, write_text
 from prg.data.alphabet import ALPHABET, char_to_label
 from prg.data.preprocess import TRAJ_LAYOUT, preprocess_stroke, render_batch
 from prg.data.samples import RawSample
@@ -155,8 +154,13 @@ def build_dataset(
     workers: int = 2,
     progress: bool = True,
     figures: bool = True,
+    metrics_path: str | os.PathLike | None = None,
 ) -> BuildResult:
     """Build ``<data_dir>/prepared/<name>/`` from the data config (``conf/data/*.yaml``).
+
+    All or nothing: the dataset folder and ``metrics_path`` are written completely under
+    temporary names first and only then renamed into place, so a failure (a full disk, a signal)
+    leaves the previous dataset and metrics as they were.
 
     Parameters
     ----------
@@ -171,6 +175,8 @@ def build_dataset(
         Show progress bars.
     figures : bool
         Also draw the sample sheet and the augmentation figure.
+    metrics_path : path, optional
+        Also write :func:`dataset_metrics` there (JSON, for DVC).
 
     Returns
     -------
@@ -279,11 +285,10 @@ def build_dataset(
     lap("render")
 
     final = data_dir / "prepared" / name
-    final.parent.mkdir(parents=True, exist_ok=True)
-    tmp = final.with_name(f".{name}.tmp-{os.getpid()}")
-    shutil.rmtree(tmp, ignore_errors=True)
-    tmp.mkdir()
-    try:
+    # the metrics file is renamed into place last (outer block), after the dataset folder
+    with contextlib.ExitStack() as stack:
+        metrics_tmp = stack.enter_context(atomic_path(metrics_path)) if metrics_path else None
+        tmp = stack.enter_context(staged_folder(final))
         for split in SPLITS:
             save_split(tmp / f"{split}.npz", split_arrays[split])
         manifest = _manifest(
@@ -296,9 +301,8 @@ def build_dataset(
 
             write_dataset_figures(tmp / "figures", split_arrays["train"], n_points, seed)
             lap("figures")
-        _replace_dir(tmp, final)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+        if metrics_tmp is not None:
+            write_text(metrics_tmp, json_text(dataset_metrics(manifest)), atomic=False)
     return BuildResult(final, manifest, timings)
 
 
@@ -344,52 +348,3 @@ def dataset_metrics(manifest: dict[str, Any]) -> dict[str, Any]:
         if key in aug:
             out[f"augment_{key}"] = aug[key]
     return out
-
-
-@contextmanager
-def staged_outputs(target: str | os.PathLike) -> Iterator[Path]:
-    """Write a command's outputs into a hidden folder beside ``target``; on success move each
-    entry into ``target`` (created then; a folder entry replaces the old one), on failure leave
-    ``target`` untouched. Nothing half-written is ever visible in ``target``."""
-    target = Path(target)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    staging = target.parent / f".{target.name}.tmp-{os.getpid()}"
-    shutil.rmtree(staging, ignore_errors=True)
-    staging.mkdir()
-    try:
-        yield staging
-        target.mkdir(exist_ok=True)
-        for item in staging.iterdir():
-            destination = target / item.name
-            if item.is_dir() and destination.exists():
-                shutil.rmtree(destination)
-            os.replace(item, destination)
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
-
-
-def write_json(path: str | os.PathLike, obj: Any) -> None:
-    """Write JSON atomically (temporary name, then rename)."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(json.dumps(obj, indent=2, sort_keys=True, default=_json_default) + "\n")
-    os.replace(tmp, path)
-
-
-def _json_default(obj: Any) -> Any:
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, np.floating):
-        return float(obj)
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
-
-
-def _replace_dir(new: Path, final: Path) -> None:
-    """Swap ``new`` into ``final``; the old folder is removed only after the swap."""
-    old = final.with_name(f".{final.name}.old-{os.getpid()}")
-    if final.exists():
-        os.replace(final, old)
-    os.replace(new, final)
-    shutil.rmtree(old, ignore_errors=True)

@@ -57,6 +57,54 @@ def _identity(batch):
     return batch
 
 
+def read_manifest(root: str | Path) -> dict[str, Any]:
+    """The ``manifest.json`` of the prepared dataset folder ``root``, checked to be one."""
+    path = Path(root) / "manifest.json"
+    rebuild = f"rebuild the dataset with `prg-prepare data={Path(root).name}`"
+    if not path.is_file():
+        raise UsageError(f"no prepared dataset at {root}: run `prg-prepare` first")
+    try:
+        manifest = json.loads(path.read_bytes())
+    except (OSError, ValueError) as err:  # UnicodeDecodeError and JSONDecodeError included
+        raise UsageError(
+            f"dataset manifest {path} is not readable JSON ({err}): {rebuild}"
+        ) from None
+    if not isinstance(manifest, dict) or not isinstance(manifest.get("source"), str):
+        raise UsageError(
+            f"dataset manifest {path} is not a prg-prepare manifest (a JSON object with a "
+            f'"source" name): {rebuild}'
+        )
+    return manifest
+
+
+def check_model_shapes(arrays: dict[str, np.ndarray], path: str | Path) -> None:
+    """Refuse a split whose trajectories or images do not have the shapes the models take
+    (``n_points`` = 100 points, 28 x 28 images: ``prg.models.components``), naming both."""
+    from prg.models.components import IMAGE_SHAPE, TRAJ_DIM
+
+    n_points, size = TRAJ_DIM // 2, IMAGE_SHAPE[-1]
+    traj, image = arrays.get("traj"), arrays.get("image")
+    wrong = []
+    if traj is not None and (traj.ndim != 2 or traj.shape[1] != TRAJ_DIM):
+        got = traj.shape[1] // 2 if traj.ndim == 2 else traj.shape
+        wrong.append(("data.preprocess.n_points", got, n_points))
+    if image is not None and (image.ndim != 3 or image.shape[1:] != (size, size)):
+        got = (
+            image.shape[1]
+            if image.ndim == 3 and image.shape[1] == image.shape[2]
+            else image.shape[1:]
+        )
+        wrong.append(("data.image.size", got, size))
+    if wrong:
+        has = " and ".join(f"{key}={got}" for key, got, _ in wrong)
+        needs = " and ".join(f"{key}={want}" for key, _, want in wrong)
+        fix = " ".join(f"{key}={want}" for key, _, want in wrong)
+        raise UsageError(
+            f"dataset {path} was prepared with {has}, but the models take {needs}: "
+            f"rebuild it with `prg-prepare {fix}`"
+        )
+
+
 class PRGDataModule(L.LightningDataModule):
     """Train/val/test loaders over ``<data_dir>/prepared/<name>/``.
 
@@ -108,10 +156,7 @@ class PRGDataModule(L.LightningDataModule):
 
     @property
     def manifest(self) -> dict[str, Any]:
-        path = self.root / "manifest.json"
-        if not path.is_file():
-            raise UsageError(f"no prepared dataset at {self.root}: run `prg-prepare` first")
-        return json.loads(path.read_text())
+        return read_manifest(self.root)
 
     def setup(self, stage: str | None = None) -> None:
         wanted = {"fit": ("train", "val"), "validate": ("val",), "test": ("test",)}.get(
@@ -119,7 +164,14 @@ class PRGDataModule(L.LightningDataModule):
         )
         for split in wanted:
             if split not in self.datasets:
-                arrays = load_split(self.root / f"{split}.npz")
+                path = self.root / f"{split}.npz"
+                arrays = load_split(path)
+                check_model_shapes(arrays, self.root)
+                if len(arrays["label"]) == 0:
+                    raise UsageError(
+                        f"dataset split {path} is empty: the {split} split needs writers "
+                        f"(data.splits.{split} > 0 when the dataset is prepared)"
+                    )
                 self.datasets[split] = ModalityDataset(arrays, self.modalities)
 
     def _loader(self, split: str, shuffle: bool) -> DataLoader:

@@ -1,6 +1,6 @@
 """Atomic, checksum-verified downloads, and fetching the UJI Pen Characters v2 data.
 
-A download streams into a hidden ``.<name>.<random>.part`` file next to its destination,
+A download streams into a hidden ``.<name>.tmp-<pid>`` file next to its destination,
 hashing as it goes, and only an ``os.replace`` of a complete, verified file creates the
 destination. Any failure removes the partial file and raises :class:`~prg.errors.DownloadError`.
 """
@@ -13,7 +13,6 @@ import os
 import re
 import shutil
 import sys
-import tempfile
 import urllib.error
 import urllib.request
 import zipfile
@@ -23,6 +22,7 @@ from typing import BinaryIO
 
 from tqdm import tqdm
 
+from prg.atomic import remove_stale
 from prg.data.uji import UJI_MEMBER, find_member
 from prg.errors import DownloadError, UsageError
 
@@ -37,6 +37,13 @@ UJI_ARCHIVE = "uji-pen-characters-v2.zip"
 """File name the archive is kept under, in ``<data_dir>/raw/uji/``."""
 
 _CHUNK = 1 << 16
+
+MAX_DOWNLOAD_BYTES = 256 * 2**20
+"""Largest body :func:`download` accepts by default (the UJI archive is about 4 MB)."""
+
+MAX_EXTRACT_BYTES = 512 * 2**20
+"""Largest data file :func:`extract_uji` writes (the UJI text is about 30 MB); a larger one is a
+corrupt or hostile archive (a zip bomb)."""
 _HEX64 = re.compile(r"[0-9a-f]{64}")
 
 
@@ -66,14 +73,24 @@ def sha256_file(path: Path) -> str:
 
 
 def _temp_beside(dest: Path) -> tuple[BinaryIO, Path]:
-    """An open, hidden ``.part`` file in ``dest``'s folder."""
+    """An open, hidden temporary file in ``dest``'s folder, named the way :mod:`prg.atomic` names
+    them (a killed download's file is removed by the next write there)."""
     dest.parent.mkdir(parents=True, exist_ok=True)
-    fd, name = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".part", dir=dest.parent)
-    return os.fdopen(fd, "wb"), Path(name)
+    remove_stale(dest.parent)
+    part = dest.with_name(f".{dest.name}.tmp-{os.getpid()}")
+    return part.open("wb"), part
 
 
-def _stream(url: str, out: BinaryIO, *, timeout: float, progress: bool, label: str) -> str:
-    """Copy the body at ``url`` into ``out``; return its hex SHA-256."""
+def _too_large(url: str, size: int, limit: int) -> DownloadError:
+    return DownloadError(
+        f"download of {url} refused: {size} bytes is more than the limit of {limit} bytes"
+    )
+
+
+def _stream(
+    url: str, out: BinaryIO, *, timeout: float, progress: bool, label: str, max_bytes: int
+) -> str:
+    """Copy the body at ``url`` into ``out``, at most ``max_bytes``; return its hex SHA-256."""
     request = urllib.request.Request(url, headers={"User-Agent": "prg-downloader/0.1"})
     try:
         response = urllib.request.urlopen(request, timeout=timeout)
@@ -85,6 +102,8 @@ def _stream(url: str, out: BinaryIO, *, timeout: float, progress: bool, label: s
     with response:
         header = response.headers.get("Content-Length", "").strip()
         total = int(header) if header.isdigit() else None
+        if total is not None and total > max_bytes:
+            raise _too_large(url, total, max_bytes)
         digest = hashlib.sha256()
         received = 0
         with tqdm(
@@ -100,6 +119,8 @@ def _stream(url: str, out: BinaryIO, *, timeout: float, progress: bool, label: s
                 digest.update(chunk)
                 out.write(chunk)
                 received += len(chunk)
+                if received > max_bytes:  # no (or a false) Content-Length
+                    raise _too_large(url, received, max_bytes)
                 bar.update(len(chunk))
     if total is not None and received != total:
         raise DownloadError(
@@ -116,6 +137,7 @@ def download(
     timeout: float = 60,
     progress: bool = True,
     pin_hint: str | None = None,
+    max_bytes: int = MAX_DOWNLOAD_BYTES,
 ) -> Path:
     """Download ``url`` to ``dest`` atomically, verifying its SHA-256.
 
@@ -135,6 +157,9 @@ def download(
         Show a tqdm progress bar on stderr.
     pin_hint : str, optional
         Config key named in the warning when ``sha256`` is ``None`` (e.g. ``data.uji_sha256``).
+    max_bytes : int
+        Largest body accepted: a larger Content-Length is refused before the body is read, a
+        body without one is cut off there.
 
     Returns
     -------
@@ -145,7 +170,8 @@ def download(
     ------
     DownloadError
         On an HTTP error, an unreachable host, a dropped connection, a body shorter than its
-        Content-Length, a checksum mismatch or a KeyboardInterrupt. No partial file remains and
+        Content-Length, a body over ``max_bytes``, a checksum mismatch or a KeyboardInterrupt.
+        No partial file remains and
         ``dest`` is left as it was.
     UsageError
         If ``sha256`` is not 64 hex digits.
@@ -155,7 +181,9 @@ def download(
     out, part = _temp_beside(dest)
     try:
         with out:
-            actual = _stream(url, out, timeout=timeout, progress=progress, label=dest.name)
+            actual = _stream(
+                url, out, timeout=timeout, progress=progress, label=dest.name, max_bytes=max_bytes
+            )
         if expected is not None and actual != expected:
             raise DownloadError(
                 f"checksum mismatch for {url}: expected sha256 {expected}, got {actual}"
@@ -193,7 +221,13 @@ def extract_uji(archive: Path, dest: Path) -> Path:
             member = find_member(zipped)
             if member is None:
                 raise UsageError(f"zip archive {archive} holds no {UJI_MEMBER}")
-            with zipped.open(member) as source:
+            size = member.file_size
+            if size > MAX_EXTRACT_BYTES:
+                raise UsageError(
+                    f"zip archive {archive}: {member} would be {size} bytes, more than the "
+                    f"{MAX_EXTRACT_BYTES} bytes a UJI data file can be"
+                )
+            with zipped.open(member) as source:  # reads no more than the declared size
                 shutil.copyfileobj(source, out, _CHUNK)
         os.replace(part, dest)
     except BaseException as exc:

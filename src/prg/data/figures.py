@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from prg.atomic import atomic_path
 from prg.data.alphabet import ALPHABET
 
 
@@ -21,9 +22,8 @@ def pyplot():
 
 
 def _save(fig, path: Path) -> None:
-    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
-    fig.savefig(tmp, dpi=80, bbox_inches="tight", metadata={"Software": None})
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=80, bbox_inches="tight", metadata={"Software": None})
 
 
 def write_dataset_figures(

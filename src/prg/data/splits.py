@@ -36,7 +36,7 @@ def split_writers(
     if unknown:
         raise UsageError(f"data.splits has unknown split(s) {sorted(unknown)}: accepted {SPLITS}")
     values = {s: float(fractions.get(s, 0.0)) for s in SPLITS}
-    if any(v < 0 for v in values.values()) or abs(sum(values.values()) - 1) > 1e-6:
+    if not all(0 <= v <= 1 for v in values.values()) or abs(sum(values.values()) - 1) > 1e-6:
         raise UsageError(f"data.splits fractions must be >= 0 and sum to 1, got {values}")
     unique = sorted(set(writers))
     n = len(unique)

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from prg.atomic import atomic_path
 from prg.errors import UsageError
 
 SPLIT_KEYS = ("traj", "image", "label", "writer", "augmented", "parent")
@@ -32,20 +33,16 @@ def save_split(path: str | os.PathLike, arrays: dict[str, np.ndarray]) -> Path:
     Written to a temporary name in the same folder, then renamed.
     """
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_STORED, allowZip64=True) as zf:
-            for key in sorted(arrays):
-                buf = io.BytesIO()
-                np.lib.format.write_array(
-                    buf, np.ascontiguousarray(arrays[key]), allow_pickle=False
-                )
-                info = zipfile.ZipInfo(f"{key}.npy", date_time=_FIXED_DATE)
-                info.external_attr = 0o644 << 16
-                zf.writestr(info, buf.getvalue())
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    with (
+        atomic_path(path) as tmp,
+        zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_STORED, allowZip64=True) as zf,
+    ):
+        for key in sorted(arrays):
+            buf = io.BytesIO()
+            np.lib.format.write_array(buf, np.ascontiguousarray(arrays[key]), allow_pickle=False)
+            info = zipfile.ZipInfo(f"{key}.npy", date_time=_FIXED_DATE)
+            info.external_attr = 0o644 << 16
+            zf.writestr(info, buf.getvalue())
     return path
 
 

@@ -230,10 +230,13 @@ def style_stroke(
     slant = style.slant + rng.normal(0, variation)
     width = style.width * (1 + rng.normal(0, variation))
     angle = np.deg2rad(style.rotation_deg + rng.normal(0, 20 * variation))
-    # y is down, so a rightward lean moves points with smaller y (higher up) to the right
-    shear = np.array([[width, -slant], [0.0, 1.0]])
-    rot = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
-    return (pts @ shear.T @ rot.T) * style.size
+    # y is down, so a rightward lean moves points with smaller y (higher up) to the right.
+    # Shear, then rotate, written out rather than as matrix products: BLAS kernels differ by CPU
+    # (with or without fused multiply-add) and would change the last bits of every stroke.
+    x = width * pts[:, 0] - slant * pts[:, 1]
+    y = pts[:, 1]
+    cos, sin = np.cos(angle), np.sin(angle)
+    return np.column_stack([cos * x - sin * y, sin * x + cos * y]) * style.size
 
 
 def generate(cfg: SyntheticConfig) -> list[RawSample]:

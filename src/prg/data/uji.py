@@ -50,6 +50,9 @@ def writer_from_session(session: str) -> str:
     return _SESSION_SUFFIX.sub("", session) or session
 
 
+MAX_COORDINATE = 2**31 - 1  # UJI's tablet coordinates are a few thousand units
+
+
 def split_lines(text: str) -> list[str]:
     """Split ``text`` on LF, CRLF or lone CR only (no other Unicode line breaks)."""
     return text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
@@ -100,7 +103,8 @@ def _parse_points(rest: str, path: str, line: int) -> np.ndarray:
         values = np.fromstring(tail, dtype=np.int64, sep=" ")
     except ValueError:
         values = None
-    if values is None or values.size != 2 * k:
+    # numpy's parser clamps out-of-range integers to the int64 limits instead of failing
+    if values is None or values.size != 2 * k or np.abs(values).max() > MAX_COORDINATE:
         values = _diagnose_coordinates(tail, k, path, line)
     return values.astype(np.float64).reshape(k, 2)
 
@@ -123,6 +127,13 @@ def _diagnose_coordinates(tail: str, k: int, path: str, line: int) -> np.ndarray
     for token in tokens:
         if not _is_int(token):
             raise DataFormatError(f"coordinate {token!r} is not an integer", path=path, line=line)
+        if abs(int(token)) > MAX_COORDINATE:
+            raise DataFormatError(
+                f"coordinate {token} is out of range: accepted are integers within "
+                f"+-{MAX_COORDINATE:,} (tablet units)",
+                path=path,
+                line=line,
+            )
     return np.array([int(t) for t in tokens], dtype=np.int64)
 
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import copy
 import hashlib
+import io
 import json
 import logging
 import os
@@ -31,8 +32,8 @@ import torch
 from torch import nn
 from tqdm.auto import tqdm
 
+from prg.atomic import write_bytes, write_json
 from prg.data.alphabet import ALPHABET, NUM_CLASSES
-from prg.data.build import write_json
 from prg.data.store import load_split
 from prg.errors import UsageError
 
@@ -315,14 +316,9 @@ def save_classifier(
         "meta": json.loads(json.dumps(dict(meta))),  # plain types only (fails loudly otherwise)
         "state_dict": {k: v.detach().cpu().clone() for k, v in model.state_dict().items()},
     }
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        torch.save(payload, tmp)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-    return path
+    buffer = io.BytesIO()  # torch.save reports a failed file write as a RuntimeError
+    torch.save(payload, buffer)
+    return write_bytes(path, buffer.getvalue())
 
 
 def load_classifier(path: str | os.PathLike) -> tuple[nn.Module, dict[str, Any]]:

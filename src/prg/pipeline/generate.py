@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import torch
 
+from prg.checks import check_text_length
 from prg.data.alphabet import label_to_char, text_to_labels, unsupported_chars
 from prg.errors import UsageError
 from prg.models.base import MODALITIES, MultimodalVAE
@@ -30,6 +31,8 @@ from prg.pipeline.layout import LayoutParams, layout_letters, word_breaks
 from prg.pipeline.word import DEFAULT_SPEED_CM_S, WordTrajectory, assemble_word
 
 log = logging.getLogger(__name__)
+
+MAX_DMP_SAMPLES = 20_000  # 200 s of writing at 100 samples/s: about 1 GB and 25 s to fit
 
 
 @dataclass(frozen=True)
@@ -152,6 +155,12 @@ def rest_to_rest_samples(
     ramp = min(ramp_s, duration / 2)
     plateau = length / (duration - ramp)
     n = max(3, int(np.ceil(duration * samples_per_s)) + 1)
+    if n > MAX_DMP_SAMPLES:  # the DMP fit's time and memory grow with n squared
+        raise UsageError(
+            f"the word is {length:.1f} cm long: at generate.speed_cm_s={speed_cm_s:g} and "
+            f"generate.samples_per_s={samples_per_s:g} its DMP would take {n:,} samples "
+            f"({duration:.0f} s); accepted are at most {MAX_DMP_SAMPLES:,}: write faster or less"
+        )
     t = np.linspace(0.0, duration, n)
     s = plateau * _ramped_distance(t, duration, ramp)
     s = np.clip(s * length / s[-1], 0.0, length)
@@ -217,10 +226,12 @@ def check_inputs(text: str, inputs: dict[str, torch.Tensor]) -> None:
     text_to_labels("".join(letters))
     if not inputs:
         raise UsageError("no inputs: give the word through at least one channel")
+    options = {"image": "images", "traj": "trajectories", "label": "text"}  # the user's names
     for modality, value in inputs.items():
         if len(value) != len(letters):
             raise UsageError(
-                f"{modality} inputs: {len(value)} given for the {len(letters)} letters of {text!r}"
+                f"{options.get(modality, modality)}= gives {len(value)} letters but the text "
+                f"{text!r} has {len(letters)} letters"
             )
 
 
@@ -288,7 +299,7 @@ def compose_word(
     return word, rollout(dmp)
 
 
-def clean_text(text: str, on_unknown: str = "error") -> str:
+def clean_text(text: str, on_unknown: str = "error", key: str = "text") -> str:
     """``text`` ready to write: words separated by single spaces, unsupported characters handled.
 
     Parameters
@@ -297,6 +308,9 @@ def clean_text(text: str, on_unknown: str = "error") -> str:
     on_unknown : {"error", "skip"}
         ``"error"``: one error listing every character outside 0-9, A-Z, a-z (spaces aside);
         ``"skip"``: drop them (logged) and write the rest.
+    key : str
+        The option the text came from, for the message when it is longer than
+        :data:`prg.checks.MAX_TEXT_LETTERS` letters.
 
     Raises
     ------
@@ -316,7 +330,7 @@ def clean_text(text: str, on_unknown: str = "error") -> str:
     cleaned = " ".join(w for w in words if w)
     if not cleaned:
         raise UsageError(f"text {text!r} has no letters to write: accepted are 0-9, A-Z and a-z")
-    return cleaned
+    return check_text_length(cleaned, key)
 
 
 def label_inputs(text: str) -> dict[str, torch.Tensor]:

@@ -365,7 +365,9 @@ def perceive_letter_images(
     return np.stack(out)[:, None]
 
 
-def segment_word_image(image: np.ndarray, min_gap: int = 1) -> list[np.ndarray]:
+def segment_word_image(
+    image: np.ndarray, min_gap: int = 1, name: str = "word image"
+) -> list[np.ndarray]:
     """Split an image of a word whose letters do not touch into per-letter images, left to right.
 
     The ink (:func:`ink_intensity`) is binarised at ``_SEGMENT_LEVEL``; its 8-connected
@@ -380,6 +382,8 @@ def segment_word_image(image: np.ndarray, min_gap: int = 1) -> list[np.ndarray]:
     image : ndarray, shape (H, W), (H, W, 3) or (H, W, 4)
     min_gap : int
         Spans separated by fewer empty columns than this are merged.
+    name : str
+        The image in error messages (its file).
 
     Returns
     -------
@@ -391,7 +395,7 @@ def segment_word_image(image: np.ndarray, min_gap: int = 1) -> list[np.ndarray]:
     UsageError
         If the image is malformed or blank.
     """
-    ink = ink_intensity(image, "word image")
+    ink = ink_intensity(image, name)
     mask = _ink_mask(ink, _SEGMENT_LEVEL)
     labels, _ = ndimage.label(mask, structure=np.ones((3, 3)))
     spans = []
@@ -399,7 +403,7 @@ def segment_word_image(image: np.ndarray, min_gap: int = 1) -> list[np.ndarray]:
         if sl is not None:
             spans.append([sl[1].start, sl[1].stop])  # columns [start, stop)
     if not spans:
-        raise UsageError("word image: image is blank (no ink stands out from the background)")
+        raise UsageError(f"{name}: image is blank (no ink stands out from the background)")
     spans.sort()
     merged = [spans[0]]
     for start, stop in spans[1:]:

@@ -140,8 +140,8 @@ class SpeechParams:
             raise UsageError(f"case {self.case!r} is unknown: accepted are {', '.join(CASES)}")
         if self.model is not None:
             object.__setattr__(self, "model", str(self.model))
-        if not self.max_seconds > 0:
-            raise UsageError(f"max_seconds must be > 0, got {self.max_seconds}")
+        if not 0 < self.max_seconds < math.inf:
+            raise UsageError(f"max_seconds must be > 0 and finite, got {self.max_seconds}")
         if not (isinstance(self.beam_size, int) and self.beam_size >= 1):
             raise UsageError(f"beam_size must be an integer >= 1, got {self.beam_size!r}")
         if self.lexicon is not None:
@@ -270,12 +270,42 @@ def rms_dbfs(samples: np.ndarray) -> float:
     return 20.0 * math.log10(rms) if rms > 0 else -math.inf
 
 
-def _read_file(path: Path) -> tuple[np.ndarray, int]:
-    """(samples (n,) or (n, channels), rate) of an audio file: soundfile, else PyAV."""
+def _too_long(name: str, seconds: float, max_seconds: float) -> UsageError:
+    return UsageError(
+        f"{name}: audio is {seconds:.1f} s long: accepted are clips up to "
+        f"speech.max_seconds={max_seconds:g} s (one word or a short phrase)"
+    )
+
+
+def _header_seconds(path: Path) -> float | None:
+    """The duration a file's header states (soundfile, else PyAV), None if none can be read."""
+    try:
+        import soundfile
+
+        info = soundfile.info(str(path))
+        return info.frames / info.samplerate if info.samplerate > 0 else None
+    except Exception:  # not a libsndfile format (or no soundfile): ask FFmpeg
+        pass
+    try:
+        import av
+
+        with av.open(str(path)) as container:
+            return container.duration / av.time_base if container.duration else None
+    except Exception:  # unreadable: the decoder below reports it
+        return None
+
+
+def _read_file(path: Path, max_seconds: float | None = None) -> tuple[np.ndarray, int]:
+    """(samples (n,) or (n, channels), rate) of an audio file: soundfile, else PyAV. With
+    ``max_seconds``, a file whose header states a longer duration is refused before decoding."""
     if not path.exists():
         raise UsageError(f"{path}: no such audio file")
     if path.is_dir():
         raise UsageError(f"{path}: is a folder, not an audio file")
+    if max_seconds is not None:
+        seconds = _header_seconds(path)
+        if seconds is not None and seconds > max_seconds:
+            raise _too_long(str(path), seconds, max_seconds)
     try:
         import soundfile
     except ImportError:
@@ -303,7 +333,9 @@ def _read_file(path: Path) -> tuple[np.ndarray, int]:
 
 
 def load_audio(
-    source: str | os.PathLike | np.ndarray | Sequence[float], sample_rate: int | None = None
+    source: str | os.PathLike | np.ndarray | Sequence[float],
+    sample_rate: int | None = None,
+    max_seconds: float | None = None,
 ) -> np.ndarray:
     """Audio to 16 kHz mono float32.
 
@@ -314,6 +346,9 @@ def load_audio(
         (int or float; ints scaled by their full scale).
     sample_rate : int, optional
         The array's sample rate in Hz; required for arrays, not accepted with a path.
+    max_seconds : float, optional
+        Refuse a file longer than this from its header, before decoding it (a 9-minute 96 kHz
+        file would otherwise be decoded and resampled in full before being refused).
 
     Returns
     -------
@@ -331,7 +366,7 @@ def load_audio(
             raise UsageError(
                 f"{name}: sample_rate is for arrays only; a file's rate is read from the file"
             )
-        data, rate = _read_file(Path(source))
+        data, rate = _read_file(Path(source), max_seconds)
     else:
         name = "audio array"
         if sample_rate is None:
@@ -357,15 +392,12 @@ def check_audio(audio: np.ndarray, params: SpeechParams, name: str = "audio") ->
         raise UsageError(f"{name}: audio is empty (no samples)")
     seconds = len(audio) / SAMPLE_RATE
     if seconds > params.max_seconds:
-        raise UsageError(
-            f"{name}: audio is {seconds:.1f} s long: accepted are clips up to "
-            f"max_seconds={params.max_seconds:g} s (one word or a short phrase)"
-        )
+        raise _too_long(name, seconds, params.max_seconds)
     level = rms_dbfs(audio)
     if level < params.min_rms_dbfs:
         raise UsageError(
             f"{name}: audio is silent (RMS {level:.1f} dBFS, below "
-            f"min_rms_dbfs={params.min_rms_dbfs:g}): record the word louder or closer"
+            f"speech.min_rms_dbfs={params.min_rms_dbfs:g}): record the word louder or closer"
         )
 
 
@@ -867,7 +899,7 @@ def recognise(
     """
     params = SpeechParams() if params is None else params
     name = str(audio) if isinstance(audio, str | os.PathLike) else "audio array"
-    samples = load_audio(audio, sample_rate)
+    samples = load_audio(audio, sample_rate, params.max_seconds)
     check_audio(samples, params, name)
     recogniser = get_recogniser(params.backend, params.model)
     start = time.perf_counter()

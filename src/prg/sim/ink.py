@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from prg.atomic import atomic_path
 from prg.sim.geometry import Paper
 
 __all__ = ["draw_strokes", "ink_png", "ink_svg", "page_texture"]
@@ -23,14 +24,8 @@ PEN_WIDTH_MM = 0.5
 def _atomic_write(path: Path, write) -> Path:
     """``write(tmp)`` to a temporary file beside ``path``, then rename it to ``path``."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
+    with atomic_path(path) as tmp:
         write(tmp)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
     return path
 
 

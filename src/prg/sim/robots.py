@@ -34,12 +34,22 @@ def resolve_urdf(path: str | os.PathLike) -> Path:
     Raises
     ------
     UsageError
-        If the file does not exist.
+        If the file does not exist or is not a URDF (XML whose root is ``<robot>``).
     """
     candidate = Path(path)
     full = candidate if candidate.is_absolute() else pybullet_data_path() / candidate
     if not full.is_file():
         raise UsageError(f"robot.urdf {path}: no such URDF (relative paths are in pybullet_data)")
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.parse(full).getroot()
+    except (ET.ParseError, UnicodeDecodeError, OSError) as err:
+        raise UsageError(f"robot.urdf {full}: not a URDF file (not XML: {err})") from None
+    if root.tag != "robot":
+        raise UsageError(
+            f"robot.urdf {full}: not a URDF file (its root is <{root.tag}>, not <robot>)"
+        )
     return full
 
 

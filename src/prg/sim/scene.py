@@ -138,14 +138,19 @@ def _rotate(quaternion: ArrayLike, vector: ArrayLike) -> NDArray[np.float64]:
 
 
 def _load_robot(p: ModuleType, cid: int, config: RobotConfig) -> LoadedRobot:
-    body = p.loadURDF(
-        str(config.urdf_path),
-        basePosition=config.base_position,
-        baseOrientation=config.base_quaternion,
-        useFixedBase=True,
-        flags=p.URDF_USE_INERTIA_FROM_FILE,
-        physicsClientId=cid,
-    )
+    try:
+        body = p.loadURDF(
+            str(config.urdf_path),
+            basePosition=config.base_position,
+            baseOrientation=config.base_quaternion,
+            useFixedBase=True,
+            flags=p.URDF_USE_INERTIA_FROM_FILE,
+            physicsClientId=cid,
+        )
+    except p.error as err:  # e.g. a link without geometry PyBullet accepts, a missing mesh
+        raise UsageError(
+            f"robot.urdf {config.urdf_path}: PyBullet cannot load it ({err})"
+        ) from None
     joints: dict[str, int] = {}
     links: dict[str, int] = {}
     movable, lower, upper, force = [], [], [], []

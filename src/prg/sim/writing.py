@@ -142,6 +142,17 @@ class SimSettings:
 # ----------------------------------------------------------------------------- the word
 
 
+MAX_WRITING_S = 600.0  # simulated seconds of writing (a 64-letter line takes about 140 s)
+
+
+def _check_duration(word: WordTrajectory, seconds: float, tempo: float) -> None:
+    if not seconds <= MAX_WRITING_S:
+        raise UsageError(
+            f"word {word.text[:40]!r} takes {seconds:.0f} s to write at tempo={tempo:g}: accepted "
+            f"are at most {MAX_WRITING_S:.0f} s of writing; lower tempo or write fewer letters"
+        )
+
+
 def word_samples(
     word: WordTrajectory, dt: float, tempo: float = 1.0
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
@@ -176,10 +187,12 @@ def word_samples(
         if dmp.dims != 2:
             raise UsageError(f"word {word.text!r}: the DMP must be 2-D, it has {dmp.dims} dims")
         tau = dmp.tau * tempo
+        _check_duration(word, tau, tempo)
         samples = rollout(dmp, tau=tau, dt=dt)
     else:
         from prg.pipeline.generate import rest_to_rest_samples
 
+        _check_duration(word, word.path_length / word.speed_cm_s * tempo, tempo)
         samples, tau = rest_to_rest_samples(word.points, word.speed_cm_s, 0.3, 1 / (dt * tempo))
         tau *= tempo
     t = np.linspace(0.0, tau, len(samples))

@@ -1,0 +1,370 @@
+"""One place for the accepted range of every numeric option of the ``prg-*`` commands.
+
+Hydra types a value by its look (``3`` int, ``nan``/``inf`` float, ``true`` bool) and checks
+nothing else, so ``generate.temperature=nan`` or ``data.splits.val=0`` would reach the
+arithmetic. :data:`RANGES` maps each numeric option (dotted key; ``*`` matches one level) to the
+values it accepts, and :func:`check_values`, called first by every command's task, refuses a
+value outside them with one line naming the option and what is accepted. NaN and infinity are
+refused everywhere. ``tests/test_bad_inputs.py`` checks that every numeric option of the composed
+configs has an entry here, so a new option cannot skip the check.
+
+:func:`require_number` is the same check for one value (for settings read outside the config);
+:func:`literal_text` recovers the characters the user typed for a text option that Hydra typed as
+a number or a boolean (``text=true``, ``text=1e3``).
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import math
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from prg.errors import UsageError
+
+SEED_MAX = 2**32 - 1  # numpy's and Lightning's seed range is [0, 2**32 - 1]
+MAX_TEXT_LETTERS = 64  # prg-write: letters in one line of text (all written as one DMP)
+
+
+@dataclass(frozen=True)
+class Range:
+    """The values a numeric option accepts: an interval, integers only or not, null or not."""
+
+    low: float | None = None
+    high: float | None = None
+    low_open: bool = False
+    high_open: bool = False
+    integer: bool = False
+    optional: bool = False  # null accepted (the option's "not set")
+    also: tuple[int, ...] = ()  # special values accepted outside the interval (-1: no limit)
+    text: bool = False  # a string is also accepted (its own code checks it: "auto")
+
+    def describe(self) -> str:
+        kind = "an integer" if self.integer else "a finite number"
+        if self.low is not None and self.high is not None:
+            left, right = "(" if self.low_open else "[", ")" if self.high_open else "]"
+            text = f"{kind} in {left}{_num(self.low)}, {_num(self.high)}{right}"
+        elif self.low is not None:
+            text = f"{kind} {'>' if self.low_open else '>='} {_num(self.low)}"
+        elif self.high is not None:
+            text = f"{kind} {'<' if self.high_open else '<='} {_num(self.high)}"
+        else:
+            text = kind
+        extra = [str(v) for v in self.also] + (["null"] if self.optional else [])
+        extra += ["a name"] if self.text else []
+        return text + "".join(f" or {e}" for e in extra)
+
+    def accepts(self, value: Any) -> bool:
+        if value is None:
+            return self.optional
+        if self.text and isinstance(value, str):
+            return True
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            return False
+        if value in self.also:
+            return True
+        if self.integer and not isinstance(value, int):
+            return False
+        if not math.isfinite(value):
+            return False
+        above = self.low is None or (value > self.low if self.low_open else value >= self.low)
+        below = self.high is None or (value < self.high if self.high_open else value <= self.high)
+        return above and below
+
+
+def _num(x: float) -> str:
+    return f"{int(x):,}" if float(x).is_integer() and abs(x) >= 10_000 else f"{x:g}"
+
+
+def positive(high: float | None = None) -> Range:
+    return Range(0, high, low_open=True)
+
+
+def non_negative(high: float | None = None) -> Range:
+    return Range(0, high)
+
+
+def count(low: int = 1, high: int | None = None, **kw: Any) -> Range:
+    return Range(low, high, integer=True, **kw)
+
+
+SEED = count(0, SEED_MAX)
+FRACTION = Range(0, 1, low_open=True, high_open=True)  # strictly between 0 and 1
+PROBABILITY = Range(0, 1)
+METRES = Range(-10, 10)  # positions in the simulated scene (and joint angles, in radians)
+DEGREES = Range(-360, 360)
+WEIGHT_MAX = 1e6  # loss and cost weights
+TEMPERATURE_MAX = 10.0  # latents drawn with their std times this: 1 is the model's own spread
+
+# ---- every numeric option of conf/ (prepare, train, evaluate, write, dictaphone, simulate) ----
+RANGES: dict[str, Range] = {
+    # data (prg-prepare; read back by prg-train and prg-evaluate)
+    "data.seed": SEED,
+    "data.preprocess.n_points": count(2, 4096),
+    "data.preprocess.smooth_sigma": non_negative(100),
+    "data.image.size": count(4, 1024),
+    "data.image.stroke_width": positive(100),
+    "data.image.margin": non_negative(100),
+    "data.augment.per_class": count(0, 100_000),
+    "data.augment.snr_target_db": Range(0, 500),
+    "data.augment.max_components": count(1, 100),
+    "data.augment.amplitude": Range(0, 1, high_open=True),
+    "data.augment.rotation_deg": non_negative(180),
+    "data.augment.sweep": PROBABILITY,
+    "data.splits.*": FRACTION,  # each split needs writers: train, validation, test
+    "data.loader.batch_size": count(1),
+    "data.loader.num_workers": count(0, 256),
+    "data.synthetic.n_writers": count(1, 10_000),
+    "data.synthetic.samples_per_char": count(1, 1000),
+    "data.synthetic.slant": Range(-10, 10),
+    "data.synthetic.width": positive(10),
+    "data.synthetic.size": positive(10),
+    "data.synthetic.rotation_deg": Range(-180, 180),
+    "data.synthetic.roundness": non_negative(100),
+    "data.synthetic.jitter": non_negative(1),
+    "data.synthetic.sample_variation": non_negative(1),
+    "data.synthetic.points_per_unit": positive(1000),
+    "workers": count(1, 256),
+    # prg-train
+    "seed": SEED,
+    "model.batch_size": count(1),
+    "model.module.model.latent_dim": count(1, 4096),
+    "model.module.model.top_latent_dim": count(1, 4096),
+    "model.module.model.traj_std": positive(100),
+    "model.module.model.alpha": non_negative(WEIGHT_MAX),
+    "model.module.model.beta": non_negative(WEIGHT_MAX),
+    "model.module.model.delta": non_negative(WEIGHT_MAX),
+    "model.module.model.kl_weight": non_negative(WEIGHT_MAX),
+    "model.module.model.lambdas.*": non_negative(WEIGHT_MAX),
+    "model.module.model.alphas.*": non_negative(WEIGHT_MAX),
+    "model.module.model.gammas.*": non_negative(WEIGHT_MAX),
+    "model.module.optimizer.lr": positive(10),
+    "model.module.optimizer.weight_decay": non_negative(10),
+    "model.module.optimizer.betas": Range(0, 1, high_open=True),
+    "model.module.optimizer.eps": positive(1),
+    "model.module.optimizer.momentum": Range(0, 1, high_open=True),
+    "model.module.scheduler.max_lr": positive(10),
+    "model.module.scheduler.pct_start": FRACTION,
+    "model.module.top_warmup_epochs": count(0),
+    "trainer.max_epochs": count(1, also=(-1,)),
+    "trainer.max_steps": count(1, also=(-1,)),
+    "trainer.limit_train_batches": positive(),  # a fraction (<= 1.0) or a number of batches
+    "trainer.limit_val_batches": positive(),
+    "trainer.check_val_every_n_epoch": count(1, optional=True),
+    "trainer.log_every_n_steps": count(1),
+    "trainer.devices": count(0, also=(-1,), text=True),  # a count, "auto", or device ids
+    "trainer.num_nodes": count(1),
+    "callbacks.checkpoint.save_top_k": count(0, also=(-1,)),
+    "callbacks.last.every_n_train_steps": count(0),
+    "callbacks.figures.every_n_epochs": count(1),
+    "callbacks.figures.n_examples": count(1, 64),
+    "callbacks.early_stopping.patience": count(0),
+    "callbacks.early_stopping.min_delta": non_negative(WEIGHT_MAX),
+    "callbacks.early_stopping.start_fraction": PROBABILITY,
+    "quick_epochs.*": count(1),
+    "converged_epochs.*": count(1),
+    # prg-evaluate
+    "n_test": count(1, optional=True),
+    "likelihood.k_marginal": count(1, 1_000_000),
+    "likelihood.k_conditional": count(1, 1_000_000),
+    "likelihood.n_test": count(1, optional=True),
+    "likelihood.batch_size": count(1, 100_000),
+    "likelihood.chunk_rows": count(1, 10_000_000),  # bounds the memory
+    "likelihood.traj_std": Range(0, 100, low_open=True, optional=True),
+    "coherence.temperatures.*": non_negative(TEMPERATURE_MAX),
+    "coherence.impute_steps": count(0, 1000),
+    "coherence.batch_size": count(1, 1_000_000),
+    "classifier.epochs": count(1, 1000),
+    "classifier.batch_size": count(1, 1_000_000),
+    "classifier.lr": positive(10),
+    "classifier.seed": SEED,
+    # prg-write (and prg-dictaphone, prg-simulate, which run it)
+    "generate.temperature": non_negative(TEMPERATURE_MAX),
+    "generate.seed": SEED,
+    "generate.impute_steps": count(0, 1000),
+    "generate.speed_cm_s": positive(1000),
+    "generate.ramp_s": non_negative(60),
+    "generate.samples_per_s": positive(10_000),
+    "generate.basis_per_100_samples": count(1, 100),
+    "layout.*": positive(100),  # cm, or fractions of the letter height
+    "connection.delta": positive(10),
+    "connection.alpha_max_deg": Range(0, 180, low_open=True),
+    "connection.theta_*": non_negative(WEIGHT_MAX),
+    "connection.home_radius": positive(100),
+    "connection.max_steps": count(1, 100_000),
+    "speech.max_seconds": positive(600),
+    "speech.min_rms_dbfs": Range(-200, 0),
+    "speech.beam_size": count(1, 64),
+    # prg-dictaphone
+    "speed": Range(10, 1000),  # espeak-ng words per minute
+    # prg-simulate
+    "scale": positive(1000),
+    "tempo": positive(10),
+    "workspace_step_cm": positive(100),
+    "paper.size_cm": positive(1000),
+    "paper.centre": METRES,
+    "paper.yaw_deg": DEGREES,
+    "paper.thickness_m": positive(0.1),
+    "paper.word_centre_cm": Range(-1000, 1000),
+    "motion.lift_cm": positive(100),
+    "motion.approach_s": positive(60),
+    "motion.lower_s": positive(60),
+    "motion.lift_s": positive(60),
+    "motion.dwell_s": non_negative(60),
+    "control.time_step": positive(0.05),
+    "control.steps_per_waypoint": count(1, 1000),
+    "control.position_gain": positive(100),
+    "control.velocity_gain": positive(100),
+    "control.contact_band_mm": positive(100),
+    "control.settle_s": non_negative(60),
+    "ik.null_space_iterations": count(1, 100_000),
+    "ik.refine_iterations": count(1, 100_000),
+    "ik.cold_iterations": count(1, 100_000),
+    "ik.residual": positive(1),
+    "ik.tolerance_mm": positive(1000),
+    "camera.width": count(1, 8192),
+    "camera.height": count(1, 8192),
+    "camera.distance": Range(0, 100, low_open=True, optional=True),
+    "camera.yaw": DEGREES,
+    "camera.pitch": DEGREES,
+    "camera.fov": Range(0, 180, low_open=True, high_open=True),
+    "robot.rest_pose": METRES,  # radians (or metres for a sliding joint)
+    "robot.held_joints.*": METRES,
+    "robot.pen_offset": METRES,
+    "robot.pen_length": positive(10),
+    "robot.pen_radius": positive(1),
+    "robot.base_position": METRES,
+    "robot.base_yaw_deg": DEGREES,
+}
+
+
+def range_of(key: str) -> Range | None:
+    """The entry of :data:`RANGES` for the dotted ``key`` (exact first, then patterns)."""
+    if key in RANGES:
+        return RANGES[key]
+    depth = key.count(".")
+    for pattern, spec in RANGES.items():
+        if pattern.count(".") == depth and fnmatch.fnmatchcase(key, pattern):
+            return spec
+    return None
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def require_number(value: Any, key: str, spec: Range) -> Any:
+    """``value`` if ``spec`` accepts it, else :class:`UsageError` naming ``key`` and the range."""
+    if not spec.accepts(value):
+        raise UsageError(f"{key} must be {spec.describe()}, got {_short(value)}")
+    return value
+
+
+def leaves(node: Any, prefix: str = "") -> Iterator[tuple[str, Any]]:
+    """(dotted key, value) of every leaf of a plain nested mapping; lists are leaves."""
+    for name, value in node.items():
+        key = f"{prefix}{name}"
+        if isinstance(value, Mapping):
+            yield from leaves(value, key + ".")
+        else:
+            yield key, value
+
+
+def _plain(cfg: Any) -> Any:
+    from omegaconf import DictConfig, OmegaConf
+    from omegaconf.errors import OmegaConfBaseException
+
+    if not isinstance(cfg, DictConfig):
+        return cfg
+    try:
+        return OmegaConf.to_container(cfg, resolve=True)
+    except OmegaConfBaseException as err:
+        raise UsageError(f"the config cannot be resolved: {' '.join(str(err).split())}") from None
+
+
+def check_values(cfg: Any) -> None:
+    """Refuse the first numeric option of ``cfg`` (DictConfig or mapping) outside its range.
+
+    Keys without an entry in :data:`RANGES` are not checked here (their own code checks them);
+    list values are checked element by element (``paper.size_cm=[0,29.7]``).
+    """
+    for key, value in leaves(_plain(cfg)):
+        spec = range_of(key)
+        if spec is None:
+            continue
+        if isinstance(value, list | tuple):
+            for i, item in enumerate(value):
+                if not spec.accepts(item) or item is None:
+                    raise UsageError(
+                        f"{key}[{i}] must be {spec.describe()}, got {_short(item)} "
+                        f"(in {key}={_short(value)})"
+                    )
+        else:
+            require_number(value, key, spec)
+
+
+def _typed_override(key: str) -> str | None:
+    """The characters after ``key=`` on the command line (Hydra's task overrides), if any."""
+    try:
+        from hydra.core.hydra_config import HydraConfig
+
+        if not HydraConfig.initialized():
+            return None
+        overrides = list(HydraConfig.get().overrides.task)
+    except Exception:  # no Hydra run: the value came from a config file or a caller
+        return None
+    for line in reversed(overrides):
+        name, sep, value = line.partition("=")
+        if sep and name.lstrip("+~") == key:
+            return value
+    return None
+
+
+def literal_text(value: Any, key: str) -> str | None:
+    """The text option ``key`` as the characters the user typed.
+
+    Hydra reads ``text=true`` as the boolean True and ``text=1e3`` as the float 1000.0; their
+    characters are taken back from the command line. A non-text value from anywhere else is
+    refused with the quoting that keeps it text.
+    """
+    if value is None or isinstance(value, str):
+        return value
+    if isinstance(value, bool | int | float):
+        typed = _typed_override(key)
+        if typed is not None:
+            return typed
+        kind = "boolean" if isinstance(value, bool) else "number"
+    else:
+        kind = type(value).__name__
+    raise UsageError(
+        f"{key}={_short(value)} was read as a {kind}, not text: quote it, {key}=\"'...'\""
+    )
+
+
+def literal_words(values: Any, key: str) -> list[str]:
+    """A list option of words (``words``, ``speech.lexicon``); every item must be text."""
+    words = list(values)
+    for i, item in enumerate(words):
+        if not isinstance(item, str):
+            kind = "a boolean" if isinstance(item, bool) else "a number"
+            if not isinstance(item, bool | int | float):
+                kind = f"a {type(item).__name__}"
+            raise UsageError(
+                f"{key}[{i}]={_short(item)} was read as {kind}, not a word: quote each word as "
+                f"typed, {key}=\"['...', '...']\""
+            )
+    return words
+
+
+def check_text_length(text: str, key: str = "text") -> str:
+    """``text`` if it holds at most :data:`MAX_TEXT_LETTERS` letters (the line is one DMP whose
+    fit grows with the square of its length)."""
+    letters = sum(not c.isspace() for c in text)
+    if letters > MAX_TEXT_LETTERS:
+        raise UsageError(
+            f"{key} has {letters} letters: accepted are at most {MAX_TEXT_LETTERS} per line "
+            "(write a longer text in several runs)"
+        )
+    return text
