@@ -123,19 +123,36 @@ def test_clean_text_lists_every_unknown_character():
         clean_text("ça va?")
 
 
+def _probabilities(first: str, second: str) -> "torch.Tensor":
+    """Per-letter class probabilities whose most probable letters spell ``first`` and whose next
+    most probable spell ``second`` (0.5 and 0.3, the rest spread over the other classes)."""
+    import torch
+
+    from prg.data.alphabet import NUM_CLASSES, char_to_label
+
+    probs = torch.full((len(first), NUM_CLASSES), 0.2 / (NUM_CLASSES - 2))
+    for i, (a, b) in enumerate(zip(first, second, strict=True)):
+        probs[i, char_to_label(a)] = 0.5
+        probs[i, char_to_label(b)] = 0.3
+    return probs
+
+
 @pytest.mark.parametrize(
-    "read, meant",
+    "first, second, meant",
     [
-        ("jumP", "jump"),  # P/p: the same shape once size is normalised away
-        ("sPOT", "SPOT"),
-        ("Cat", "cat"),  # a and t are small
-        ("oX Vw", "oX Vw"),  # only twins: no evidence either way
-        ("Ab", "Ab"),  # a tie: left as read
-        ("0pen", "0pen"),  # a digit keeps its class
-        ("Hi xYz", "Hi XYZ"),  # word by word
+        ("DeII", "bell", "bell"),  # most letters small: b and l are the best small readings
+        ("ca5", "cat", "cat"),  # a digit in a word of letters
+        ("jumP", "jump", "jump"),  # P/p: the same shape once size is normalised away
+        ("sPOT", "SPOT", "SPOT"),
+        ("Cat", "cat", "cat"),
+        ("oXVw", "OxvW", "oXVw"),  # only twins, no evidence either way: as read
+        ("Ab", "ab", "ab"),  # A and b are each read best as small letters
+        ("DeIl", "bEll", "bell"),
+        ("2O24", "2024", "2024"),  # a number: O re-read as a digit
+        ("Hi", "hI", "Hi"),  # capitals and small letters equally probable: as read
     ],
 )
-def test_case_twins_take_the_case_of_their_word(read, meant):
-    from prg.pipeline.generate import case_from_context
+def test_letters_are_read_in_the_kind_of_their_word(first, second, meant):
+    from prg.pipeline.generate import read_in_context
 
-    assert case_from_context(read) == meant
+    assert read_in_context(_probabilities(first, second)) == meant

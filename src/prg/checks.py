@@ -160,7 +160,7 @@ RANGES: dict[str, Range] = {
     "callbacks.figures.every_n_epochs": count(1),
     "callbacks.figures.n_examples": count(1, 64),
     "callbacks.early_stopping.patience": count(0),
-    "callbacks.early_stopping.min_delta": non_negative(WEIGHT_MAX),
+    "callbacks.early_stopping.min_delta": non_negative(),  # a loss difference: any finite size
     "callbacks.early_stopping.start_fraction": PROBABILITY,
     "quick_epochs.*": count(1),
     "converged_epochs.*": count(1),

@@ -16,6 +16,7 @@ constant in between; the mean speed over the word stays ``speed_cm_s``.
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -195,28 +196,37 @@ def infer_text(model: MultimodalVAE, inputs: dict[str, torch.Tensor], impute_ste
     chosen = usable_inputs(model, inputs)
     with torch.no_grad():
         probs = model.generate(chosen, "label", impute_steps=impute_steps)[0]
-    return case_from_context("".join(label_to_char(int(i)) for i in probs.argmax(-1)))
+    return read_in_context(probs)
 
 
 # Letters whose capital and small forms are the same shape: a letter image or trajectory is
 # normalised for size and position, so nothing in it tells P from p.
 CASE_TWINS = frozenset("CcOoPpSsVvWwXxZz")
 
+# The label ranges of each kind of character (prg.data.alphabet: 0-9, A-Z, a-z).
+_KIND_LABELS = (range(0, 10), range(10, 36), range(36, 62))
 
-def case_from_context(text: str) -> str:
-    """Give each case-twin letter (``CASE_TWINS``) of every word the case most of that word's
-    other letters have, as a reader would: "jumP" -> "jump", "sPOT" -> "SPOT". A word without a
-    majority (a tie, or only twins and digits) is left as read."""
-    words = []
-    for word in text.split(" "):
-        cased = [c for c in word if c.isalpha() and c not in CASE_TWINS]
-        upper = sum(c.isupper() for c in cased)
-        lower = len(cased) - upper
-        if upper != lower:
-            fix = str.upper if upper > lower else str.lower
-            word = "".join(fix(c) if c in CASE_TWINS else c for c in word)
-        words.append(word)
-    return " ".join(words)
+
+def read_in_context(probs: torch.Tensor) -> str:
+    """The word a reader sees in per-letter class probabilities ``(n, 62)``.
+
+    A word is written in one kind of character — small letters, capitals or digits — so each
+    letter is read as its most probable character of the kind that makes the whole word most
+    probable (the sum over letters of the log of each letter's best probability in that kind),
+    as a reader reads a letter in its word: "DeII" becomes "bell" when b and l are those
+    letters' most probable small letters, "ca5" becomes "cat", "jumP" becomes "jump". When two
+    kinds are equally probable (only case twins such as o/O, ``CASE_TWINS``, or a tie) each
+    letter keeps its most probable character.
+    """
+    logp = probs.clamp_min(1e-12).log()
+    scores = [float(logp[:, kind.start : kind.stop].max(-1).values.sum()) for kind in _KIND_LABELS]
+    ranked = sorted(scores, reverse=True)
+    if math.isclose(ranked[0], ranked[1], rel_tol=1e-9, abs_tol=1e-9):
+        labels = probs.argmax(-1)
+    else:
+        kind = _KIND_LABELS[scores.index(ranked[0])]
+        labels = probs[:, kind.start : kind.stop].argmax(-1) + kind.start
+    return "".join(label_to_char(int(i)) for i in labels)
 
 
 def check_inputs(text: str, inputs: dict[str, torch.Tensor]) -> None:
