@@ -157,7 +157,7 @@ def dictaphone(cfg: DictConfig) -> dict[str, Any]:
                         _save_png(image, folder / f"{i}_{word[i]}.png")
                     inputs = {"image": image_inputs(folder)}
                     text = word
-                    perceived = _read(model, inputs, params.impute_steps)
+                    perceived = _read(model, inputs)
                     figure_inputs[word, channel] = images_of_word
                 check_inputs(text, inputs)
                 letters = decode_letters(
@@ -219,9 +219,9 @@ def dictaphone(cfg: DictConfig) -> dict[str, Any]:
     return metrics
 
 
-def _read(model, inputs, impute_steps: int) -> str:
+def _read(model, inputs) -> str:
     try:
-        return infer_text(model, inputs, impute_steps)
+        return infer_text(model, inputs)
     except UsageError:  # the family does not generate labels
         return ""
 

@@ -202,7 +202,7 @@ def write(cfg: DictConfig) -> tuple[WordTrajectory, Path]:
         inputs["traj"] = trajectory_inputs(cfg.trajectories)
     start = time.perf_counter()
     if text is None:
-        text = infer_text(model, inputs, params.impute_steps)
+        text = infer_text(model, inputs)
         log.info("read %r from the images", text)
         check_text_length(text, "the word read from images=/trajectories=")
     check_inputs(text, inputs)
