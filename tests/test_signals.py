@@ -276,16 +276,19 @@ COMMANDS = {
 }
 
 
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
 @pytest.mark.parametrize("command", list(COMMANDS))
-def test_every_command_stops_on_sigterm(command, tmp_path, dataset, untrained_muse_checkpoint):
+def test_every_command_stops_on_a_signal(
+    command, sig, tmp_path, dataset, untrained_muse_checkpoint
+):
     out = tmp_path / "out"
     out.mkdir()
     (out / "previous.txt").write_text("an earlier run's output\n")
     before = _tree_hashes(out, tmp_path / "models")
     argv = COMMANDS[command](tmp_path, dataset, untrained_muse_checkpoint)
     ready = (lambda pid: bool(_descendants(pid))) if command == "prg.paper_scale" else None
-    code, err, left = signal_command(argv, signal.SIGTERM, tmp_path, ready or (lambda pid: True))
-    check(code, err, left, command, signal.SIGTERM)
+    code, err, left = signal_command(argv, sig, tmp_path, ready or (lambda pid: True))
+    check(code, err, left, command, sig)
     after = {k: v for k, v in _tree_hashes(out, tmp_path / "models").items() if "/logs/" not in k}
     assert after == before  # logs (paper_scale's per-job logs) are not outputs
     assert not _leftovers(tmp_path)
