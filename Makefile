@@ -90,7 +90,7 @@ results: setup ## benchmarks/results.md and the README's result tables from the 
 
 # Mutation testing, not in CI: mutmut ([tool.mutmut] in pyproject.toml) mutates a copy of the
 # numeric core under mutants/ and runs each mutant against the tests that reach the mutated function.
-# All of it (~3600 mutants) took 22 min on 2 shared cores; a part by mutant-name globs, e.g.
+# All of it (~6000 mutants) took about 27 min on 2 shared cores; a part by mutant-name globs, e.g.
 # MUTANTS='prg.pipeline.dmp*' or MUTANTS='prg.pipeline.* prg.models.fusion*' (8 min).
 MUTANTS ?=
 MUTATE_JOBS ?= 2
