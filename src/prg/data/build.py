@@ -29,6 +29,7 @@ from prg.data.splits import SPLITS, split_writers
 from prg.data.store import save_split
 from prg.data.uji import select_single_stroke_alphabet
 from prg.errors import UsageError
+from prg.signals import deferred
 
 log = logging.getLogger(__name__)
 
@@ -303,6 +304,8 @@ def build_dataset(
             lap("figures")
         if metrics_tmp is not None:
             write_text(metrics_tmp, json_text(dataset_metrics(manifest)), atomic=False)
+        with deferred():  # a signal cannot fall between the folder's and the metrics' renames
+            stack.close()
     return BuildResult(final, manifest, timings)
 
 
