@@ -83,6 +83,7 @@ Y_SIGN = np.array([1.0, -1.0])  # word (x, y up) -> Rerun 2D (x, y down), and ba
 DECODED_SPACING = 2.5  # normalised letters span [-1, 1]: side by side with a small gap
 TIMELINE = "time"
 AUDIO_TIMELINE = "audio_time"
+FLUSH_TIMEOUT_S = 60.0  # seconds a recording may take to reach its file at the end
 
 PAPER = (255, 255, 255)
 INK = (20, 20, 20)
@@ -146,8 +147,10 @@ def recording_stream(
         try:
             yield rec
             try:
-                rec.flush()
-            except RuntimeError as err:  # rerun's file writer failed (a full disk, a size limit)
+                # finite: after a failed write, rerun's flush can wait for its dead writer thread
+                # for ever (seen under a file-size limit); a word's recording flushes in < 1 s
+                rec.flush(timeout_sec=FLUSH_TIMEOUT_S)
+            except (RuntimeError, TimeoutError) as err:  # the file writer failed (a full disk)
                 raise OSError(
                     errno.EIO, f"the recording could not be written ({err})", tmp
                 ) from err
