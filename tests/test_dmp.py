@@ -369,14 +369,9 @@ NON_DEFAULT = [
 ]
 
 
-@pytest.mark.parametrize(
-    ("stiffness", "damping", "alpha_x", "width_factor", "n_basis", "tau", "lam"), NON_DEFAULT
-)
-def test_non_default_constants_are_stored_used_and_reproduce_the_demonstration(
-    stiffness, damping, alpha_x, width_factor, n_basis, tau, lam
-):
-    points = word_like(600, loops=7)
-    dmp = fit_dmp(
+def _fit_with(points, stiffness, damping, alpha_x, width_factor, n_basis, tau, lam):
+    """``fit_dmp`` with every constant given (a NON_DEFAULT row)."""
+    return fit_dmp(
         points,
         tau=tau,
         n_basis=n_basis,
@@ -386,6 +381,16 @@ def test_non_default_constants_are_stored_used_and_reproduce_the_demonstration(
         alpha_x=alpha_x,
         width_factor=width_factor,
     )
+
+
+@pytest.mark.parametrize(
+    ("stiffness", "damping", "alpha_x", "width_factor", "n_basis", "tau", "lam"), NON_DEFAULT
+)
+def test_non_default_constants_are_stored_used_and_reproduce_the_demonstration(
+    stiffness, damping, alpha_x, width_factor, n_basis, tau, lam
+):
+    points = word_like(600, loops=7)
+    dmp = _fit_with(points, stiffness, damping, alpha_x, width_factor, n_basis, tau, lam)
     # every field, against the documented formulas
     want_damping = 2.0 * math.sqrt(stiffness) if damping is None else damping
     assert (dmp.stiffness, dmp.damping, dmp.alpha_x, dmp.tau) == (
@@ -425,16 +430,7 @@ def test_non_default_constants_move_the_goal_by_their_own_transition(
     stiffness, damping, alpha_x, width_factor, n_basis, tau, lam
 ):
     points = word_like(400, loops=5)
-    dmp = fit_dmp(
-        points,
-        tau=tau,
-        n_basis=n_basis,
-        regularisation=lam,
-        stiffness=stiffness,
-        damping=damping,
-        alpha_x=alpha_x,
-        width_factor=width_factor,
-    )
+    dmp = _fit_with(points, stiffness, damping, alpha_x, width_factor, n_basis, tau, lam)
     # s(t): the zero-weight DMP from 0 to 1 with the same constants, by RK4
     unit = DMP(
         weights=np.zeros((n_basis, 1)),

@@ -305,17 +305,16 @@ def one_sample_ttest(
     n = len(x)
     null = {"greater": "<=", "less": ">=", "two-sided": "="}[alternative]
     name = f"one-sample t-test vs {popmean:g} on {unit}"
+    common = dict(
+        test=name, null_hypothesis=f"mean {null} {popmean:g}", n=n, clusters=n_clusters, alpha=alpha
+    )
     why = _no_spread(x, f"every {unit[:-1] if unit.endswith('s') else unit}")
     if why:
         return tests_frame(
             [
                 dict(
-                    test=name,
-                    null_hypothesis=f"mean {null} {popmean:g}",
-                    n=n,
-                    clusters=n_clusters,
+                    **common,
                     estimate=float(np.mean(x)) if n else np.nan,
-                    alpha=alpha,
                     conclusion=f"not estimable: {why}",
                     method="scipy ttest_1samp not run",
                 )
@@ -337,10 +336,7 @@ def one_sample_ttest(
     return tests_frame(
         [
             dict(
-                test=name,
-                null_hypothesis=f"mean {null} {popmean:g}",
-                n=n,
-                clusters=n_clusters,
+                **common,
                 estimate=mean,
                 ci_low=mean - q * se,
                 ci_high=mean + q * se,
@@ -348,7 +344,6 @@ def one_sample_ttest(
                 statistic=float(res.statistic),
                 df=n - 1,
                 p_value=p,
-                alpha=alpha,
                 reject=reject,
                 conclusion=conclusion,
                 method=f"scipy ttest_1samp ({alternative})"
