@@ -51,15 +51,15 @@ demo: setup ## Run the whole pipeline (dvc repro): data, models, evaluation, Tab
 	@echo "Rerun:    rerun --web-viewer reports/simulate/sim.rrd   (or plain \`rerun FILE\` with a display)"
 	@echo "Results:  make results SNAPSHOT=1   (the README's tables from these reports)"
 
-# Options after PAPER_ARGS=, e.g. PAPER_ARGS="--families muse --device auto" (python -m prg.paper_scale -h)
+# Options after PAPER_ARGS=, e.g. PAPER_ARGS="--families muse --device auto" (python -m prg.commands.paper_scale -h)
 paper: setup ## Paper scale on one GPU: the 4 families (experiment=paper) at once, then K=1000/5000 -> paper/
-	$(BIN)/python -m prg.paper_scale $(PAPER_ARGS)
+	$(BIN)/python -m prg.commands.paper_scale $(PAPER_ARGS)
 
 # The whole split at K=1000/5000 takes ~70 min on 2 CPU cores (image cells): Table I on 100 test
 # samples by default, coherence and robustness on the whole split; CONVERGED_ARGS= for all of it.
 CONVERGED_ARGS ?= --n-test-likelihood 100
 converged: setup ## Converged profile on this machine: the 4 families (experiment=converged), then K=1000/5000 -> converged/
-	$(BIN)/python -m prg.paper_scale --profile converged --device auto $(CONVERGED_ARGS)
+	$(BIN)/python -m prg.commands.paper_scale --profile converged --device auto $(CONVERGED_ARGS)
 
 test: setup ## Run the default test suite (fast; no `slow` tests)
 	$(BIN)/pytest -m "not slow" -n 2 -q

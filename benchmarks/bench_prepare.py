@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from prg.cli import compose_config
+from prg.commands.cli import compose_config
 from prg.data.build import build_dataset
 from prg.data.preprocess import _to_image_coords, render_batch
 from prg.data.store import load_split

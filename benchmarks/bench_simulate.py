@@ -32,10 +32,10 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from prg.cli import compose_config
+from prg.commands.cli import compose_config
+from prg.commands.simulate import settings_from_config
 from prg.pipeline.word import WordTrajectory
 from prg.sim import font_word, simulate_word
-from prg.simulate import settings_from_config
 
 RESULTS = Path(__file__).parent / "results"
 ROOT = Path(__file__).parent.parent
@@ -49,12 +49,14 @@ def make_words(words: list[str]) -> tuple[dict[str, WordTrajectory], str]:
     ckpt = ROOT / "models" / "muse" / "model.ckpt"
     if not ckpt.exists():
         return {w: font_word(w) for w in words}, "Hershey font (futural), no models/muse"
+    from prg.commands.write import params_from_config
     from prg.models.checkpoint import load_model
-    from prg.pipeline.generate import GenerateParams, label_inputs, write_word
-    from prg.write import params_from_config
+    from prg.pipeline.decode import label_inputs
+    from prg.pipeline.compose import GenerateSettings
+    from prg.pipeline.generate import write_word  # TODO
 
     model, _ = load_model(ckpt)
-    params: GenerateParams = params_from_config(compose_config("write", []))
+    params: GenerateSettings = params_from_config(compose_config("write", []))
     out = {w: write_word(model, w, label_inputs(w), params)[0] for w in words}
     return out, str(ckpt.relative_to(ROOT))
 

@@ -45,7 +45,7 @@ import numpy as np
 from prg.errors import UsageError
 from prg.pipeline.speech import (
     DEFAULT_WAV2VEC2,
-    SpeechParams,
+    SpeechSettings,
     get_recogniser,
     letter_error_rate,
     recognise,
@@ -63,17 +63,17 @@ WORDS = (
 )  # fmt: skip
 
 
-def configurations(lexicon: tuple[str, ...], wav2vec2: str | None) -> dict[str, SpeechParams]:
+def configurations(lexicon: tuple[str, ...], wav2vec2: str | None) -> dict[str, SpeechSettings]:
     configs = {
-        "whisper": SpeechParams(),
-        "whisper+lexicon": SpeechParams(lexicon=lexicon),
-        "whisper+rescore": SpeechParams(lexicon=lexicon, rescore=True),
-        "pocketsphinx": SpeechParams(backend="pocketsphinx"),
-        "pocketsphinx+grammar": SpeechParams(backend="pocketsphinx", lexicon=lexicon),
+        "whisper": SpeechSettings(),
+        "whisper+lexicon": SpeechSettings(lexicon=lexicon),
+        "whisper+rescore": SpeechSettings(lexicon=lexicon, rescore=True),
+        "pocketsphinx": SpeechSettings(backend="pocketsphinx"),
+        "pocketsphinx+grammar": SpeechSettings(backend="pocketsphinx", lexicon=lexicon),
     }
     if wav2vec2 is not None:
-        configs["wav2vec2"] = SpeechParams(backend="wav2vec2", model=wav2vec2)
-        configs["wav2vec2+rescore"] = SpeechParams(
+        configs["wav2vec2"] = SpeechSettings(backend="wav2vec2", model=wav2vec2)
+        configs["wav2vec2+rescore"] = SpeechSettings(
             backend="wav2vec2", model=wav2vec2, lexicon=lexicon, rescore=True
         )
     return configs
@@ -94,7 +94,7 @@ def synthesise(words, voices, folder: Path) -> list[tuple[str, str, Path]]:
     return items
 
 
-def run_once(path: Path, params: SpeechParams) -> tuple[str, float]:
+def run_once(path: Path, params: SpeechSettings) -> tuple[str, float]:
     """(written word or "" when no usable transcript, seconds)."""
     start = time.perf_counter()
     try:

@@ -57,7 +57,7 @@ import torch
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
-from prg.cli import compose_config
+from prg.commands.cli import compose_config
 from prg.data.datamodule import PRGDataModule
 from prg.models.module import PRGModule
 

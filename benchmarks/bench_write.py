@@ -44,16 +44,13 @@ import numpy as np
 import torch
 from omegaconf import OmegaConf
 
-from prg.cli import compose_config
+from prg.commands.cli import compose_config
 from prg.errors import UsageError
 from prg.models.checkpoint import load_model
-from prg.pipeline.generate import (
-    GenerateParams,
-    label_inputs,
-    rest_to_rest_samples,
-    usable_inputs,
-    write_word,
-)
+from prg.pipeline.decode import label_inputs, usable_inputs
+from prg.pipeline.compose import GenerateSettings
+from prg.pipeline.timing import rest_to_rest_samples
+from prg.pipeline.generate import write_word  # TODO
 
 RESULTS = Path(__file__).parent / "results"
 ROOT = Path(__file__).parent.parent
@@ -85,7 +82,7 @@ def words_of(length: int, reps: int, rng: random.Random) -> list[str]:
     return ["".join(rng.choice(string.ascii_lowercase) for _ in range(length)) for _ in range(reps)]
 
 
-def time_word(model, text: str, params: GenerateParams) -> dict:
+def time_word(model, text: str, params: GenerateSettings) -> dict:
     inputs = label_inputs(text)
     start = time.perf_counter()
     with torch.no_grad():
@@ -94,7 +91,7 @@ def time_word(model, text: str, params: GenerateParams) -> dict:
     start = time.perf_counter()
     word, path = write_word(model, text, inputs, params)
     total = time.perf_counter() - start
-    straight = GenerateParams(**{**params.__dict__, "method": "straight"})
+    straight = GenerateSettings(**{**params.__dict__, "method": "straight"})
     start = time.perf_counter()
     write_word(model, text, inputs, straight)
     total_straight = time.perf_counter() - start
@@ -114,7 +111,7 @@ def time_word(model, text: str, params: GenerateParams) -> dict:
     }
 
 
-def speech_rows(model, family: str, params: GenerateParams, reps: int) -> list[dict]:
+def speech_rows(model, family: str, params: GenerateSettings, reps: int) -> list[dict]:
     """Speech end to end per backend: espeak-ng audio -> recogniser -> word -> DMP rollout."""
     from prg.pipeline import speech
 
@@ -126,7 +123,7 @@ def speech_rows(model, family: str, params: GenerateParams, reps: int) -> list[d
             subprocess.run(["espeak-ng", "-w", str(wav), word], check=True)
             audio[word] = wav
         for backend, settings in SPEECH_SETTINGS.items():
-            settings = speech.SpeechParams(**settings)
+            settings = speech.SpeechSettings(**settings)
             speech.get_recogniser(settings.backend, settings.model)  # load it once, untimed
             for word, wav in audio.items():
                 times, recognise_times, heard = [], [], None
@@ -164,7 +161,7 @@ def main() -> None:
     parser.add_argument("--speech", action="store_true", help="also time speech input")
     args = parser.parse_args()
     torch.set_num_threads(args.threads)
-    params = GenerateParams()
+    params = GenerateSettings()
 
     rows, speech, sources = [], [], {}
     for family in args.families:

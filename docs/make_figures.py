@@ -42,8 +42,12 @@ def word_figure(model, params, path: Path) -> str:
     """``WORD``: letters (black), connection strokes (red); beside it the DMP's rollout by time."""
     from matplotlib.collections import LineCollection
 
-    from prg.data.figures import pyplot
-    from prg.pipeline.generate import label_inputs, rest_to_rest_samples, write_word
+    from prg.pipeline.decode import label_inputs
+
+    from prg.pipeline.timing import rest_to_rest_samples
+
+    from prg.pipeline.generate import write_word  # TODO
+    from prg.plotting import pyplot
 
     word, rollout = write_word(model, WORD, label_inputs(WORD), params)
     p = params
@@ -80,11 +84,12 @@ def robot_figure(model, params, cfg, path: Path) -> str:
     """The Panda near the end of ``ROBOT_WORD``: a 3/4 view and, inset, a close-up of the page."""
     from PIL import Image
 
-    from prg.pipeline.generate import label_inputs, write_word
+    from prg.commands.simulate import settings_from_config
+    from prg.pipeline.decode import label_inputs
+    from prg.pipeline.generate import write_word  # TODO
     from prg.sim import Scene, simulate_word
     from prg.sim.geometry import runs
     from prg.sim.ink import draw_strokes
-    from prg.simulate import settings_from_config
 
     robot, settings = settings_from_config(cfg)
     word, _ = write_word(model, ROBOT_WORD, label_inputs(ROBOT_WORD), params)
@@ -127,9 +132,9 @@ def main() -> None:
     if not CKPT.is_file():
         sys.exit(f"make_figures: {CKPT.relative_to(ROOT)} is missing: run `make demo` first")
     start = time.perf_counter()
-    from prg.cli import compose_config
+    from prg.commands.cli import compose_config
+    from prg.commands.write import params_from_config
     from prg.models.checkpoint import load_model
-    from prg.write import params_from_config
 
     digest = hashlib.sha256(CKPT.read_bytes()).hexdigest()[:12]
     cfg = compose_config("simulate", [f"scale={SCALE}"])

@@ -31,8 +31,8 @@ from importlib import resources
 from pathlib import Path
 
 import prg
-from prg.atomic import staged_folder
-from studies.design import ROBOT, Row, StudyConfig, balance_notes, design_rows
+from prg.files import staged_folder
+from studies.design import ROBOT, Row, StudySettings, balance_notes, design_rows
 from studies.stimuli import (
     HumanSamples,
     RenderStyle,
@@ -111,7 +111,7 @@ def js_assignment(variable: str, value) -> str:
     return f"window.{variable} = {text};\n"
 
 
-def choose_writers(config: StudyConfig, humans: HumanSamples) -> tuple[dict, list[str]]:
+def choose_writers(config: StudySettings, humans: HumanSamples) -> tuple[dict, list[str]]:
     """The human writers used per word (first ``human_writers`` in sorted order) and what is
     missing."""
     used: dict[str, list[str]] = {}
@@ -199,7 +199,7 @@ def _hash(*parts: bytes) -> str:
 
 
 def build_study(
-    config: StudyConfig,
+    config: StudySettings,
     human_dirs: Sequence[str | Path] = (),
     robot_dir: str | Path | None = None,
     ckpt: str | Path | None = None,
@@ -211,7 +211,7 @@ def build_study(
 
     Parameters
     ----------
-    config : StudyConfig
+    config : StudySettings
     human_dirs : sequence of path
         Folders of human samples (capture JSON, strokes JSON, SVG), added to the config's
         ``human.dirs``.
@@ -250,7 +250,7 @@ def build_study(
 
 def _build_into(
     root: Path,
-    config: StudyConfig,
+    config: StudySettings,
     style: RenderStyle,
     human_dirs: Sequence[str | Path],
     robot_dir: str | Path | None,
@@ -382,7 +382,7 @@ def _build_into(
 
 
 def _page_config(
-    config: StudyConfig, app_version: str, ready: bool, missing: list[str], pilot: bool
+    config: StudySettings, app_version: str, ready: bool, missing: list[str], pilot: bool
 ) -> dict:
     code = config.completion["code"]
     url = config.completion["url"]
@@ -416,7 +416,7 @@ def _write_json(path: Path, obj) -> None:
     path.write_text(json.dumps(obj, indent=1, sort_keys=True, ensure_ascii=False) + "\n")
 
 
-def _readme(config: StudyConfig, page: dict) -> str:
+def _readme(config: StudySettings, page: dict) -> str:
     if page["pilot"]:
         status = "PILOT (stand-ins replace the missing human samples: try it, collect no data)"
     elif page["ready"]:

@@ -9,7 +9,7 @@ Examples
 ``analyze``, ``power`` and ``simulate`` come from :mod:`studies.analysis.commands` when it is
 installed. A mistake the user can fix (:class:`prg.errors.UsageError`) is one line,
 ``prg-study: error: <message>``, exit code 2; other :class:`prg.errors.PRGError` and an
-:class:`OSError` about a file or the disk (see :func:`prg.cli.os_error_message`) exit 1.
+:class:`OSError` about a file or the disk (see :func:`prg.commands.cli.os_error_message`) exit 1.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import NoReturn
 
-from prg.cli import check_output, handle_signals, os_error_message
+from prg.commands.cli import check_output, handle_signals, os_error_message
 from prg.errors import PRGError, UsageError
 
 PROG = "prg-study"
@@ -154,7 +154,7 @@ def make_parser() -> Parser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run ``prg-study``; returns the exit code (a signal exits with 128 + its number, see
-    :func:`prg.cli.handle_signals`)."""
+    :func:`prg.commands.cli.handle_signals`)."""
     with handle_signals(PROG):
         return _main(argv)
 

@@ -1,7 +1,7 @@
 """Study designs: the YAML description of a study and its counterbalanced trial lists.
 
 A study is one YAML file under ``conf/study/`` (``turing.yaml``, ``readability.yaml``), read by
-:func:`load_study` into a :class:`StudyConfig`. Everything a participant sees is decided here,
+:func:`load_study` into a :class:`StudySettings`. Everything a participant sees is decided here,
 offline and seeded, as one :class:`Row` per participant (the page picks its row, see
 :func:`assign_row`):
 
@@ -101,7 +101,7 @@ class AttentionCheck:
 
 
 @dataclass(frozen=True)
-class StudyConfig:
+class StudySettings:
     """A study as described by its YAML file (see ``conf/study/turing.yaml`` for every key).
 
     Attributes
@@ -351,7 +351,7 @@ def _float(doc: Mapping, key: str, default: float, low: float, high: float) -> f
     return float(value)
 
 
-def study_from_dict(doc: Mapping[str, Any], source: str = "<dict>") -> StudyConfig:
+def study_from_dict(doc: Mapping[str, Any], source: str = "<dict>") -> StudySettings:
     """Validate a parsed study document; raises :class:`UsageError` naming the bad key."""
     if not isinstance(doc, Mapping):
         raise UsageError("a study file must hold a mapping of keys (name, kind, words, ...)")
@@ -422,7 +422,7 @@ def study_from_dict(doc: Mapping[str, Any], source: str = "<dict>") -> StudyConf
             f"completion.code must be 1-64 letters, digits, - or _ (it goes into the "
             f"completion URL), got {code!r}"
         )
-    config = StudyConfig(
+    config = StudySettings(
         name=name,
         kind=kind,
         words=tuple(words),
@@ -470,7 +470,7 @@ def _page(page: dict, kind: str, name: str) -> dict:
     return out
 
 
-def _checks(raw: Any, config: StudyConfig) -> tuple[AttentionCheck, ...]:
+def _checks(raw: Any, config: StudySettings) -> tuple[AttentionCheck, ...]:
     if not isinstance(raw, list):
         raise UsageError("attention_checks must be a list of {after_trial, instruction, expect}")
     checks = []
@@ -555,7 +555,7 @@ def apply_overrides(doc: dict, overrides: Sequence[str]) -> dict:
     return out
 
 
-def load_study(path: str | Path, overrides: Sequence[str] = ()) -> StudyConfig:
+def load_study(path: str | Path, overrides: Sequence[str] = ()) -> StudySettings:
     """Read and validate a study YAML file (plus ``key=value`` overrides).
 
     Raises
@@ -589,7 +589,7 @@ def default_completion_code(name: str, seed: int) -> str:
 
 def normalise_answer(text: str) -> str:
     """How typed words are compared in study 2 (the rule of
-    ``studies.analysis.schema.normalize_text``, which the page follows too): trimmed,
+    ``studies.analysis.schema.normalise_text``, which the page follows too): trimmed,
     case-folded, inner white space collapsed."""
     return " ".join(str(text).split()).casefold()
 
@@ -718,12 +718,12 @@ def _writers(writers: Mapping[str, Sequence[str]], word: str, needed: int) -> li
     return ids
 
 
-def turing_rows(config: StudyConfig, writers: Mapping[str, Sequence[str]]) -> tuple[Row, ...]:
+def turing_rows(config: StudySettings, writers: Mapping[str, Sequence[str]]) -> tuple[Row, ...]:
     """Study 1's trial list: one :class:`Row` per participant.
 
     Parameters
     ----------
-    config : StudyConfig
+    config : StudySettings
         ``kind == "turing"``.
     writers : mapping of str to sequence of str
         Human writer ids available per word (at least ``foils`` each; the first
@@ -748,7 +748,7 @@ def turing_rows(config: StudyConfig, writers: Mapping[str, Sequence[str]]) -> tu
 
 
 def _turing_trial(
-    config: StudyConfig,
+    config: StudySettings,
     pools: Mapping[str, Sequence[str]],
     w: int,
     position: int,
@@ -760,7 +760,7 @@ def _turing_trial(
     return Trial(word, (*foils[:position], ROBOT, *foils[position:]), robot_index=position)
 
 
-def _with_checks_of(main: Sequence[Trial], config: StudyConfig) -> tuple[Trial, ...]:
+def _with_checks_of(main: Sequence[Trial], config: StudySettings) -> tuple[Trial, ...]:
     """``main`` with the config's attention checks inserted. A check repeats one of the
     participant's own screens (its ``word``'s, else the one just before it) so that it shows
     nothing new: a second look at another sample could give the robot away (study 1) or prime
@@ -791,7 +791,7 @@ def split_lists(words: Sequence[str], lists: Sequence[str], seed: int) -> dict[s
     return {lists[0]: first, lists[1]: second}
 
 
-def readability_rows(config: StudyConfig, writers: Mapping[str, Sequence[str]]) -> tuple[Row, ...]:
+def readability_rows(config: StudySettings, writers: Mapping[str, Sequence[str]]) -> tuple[Row, ...]:
     """Study 2's trial list: one :class:`Row` per participant.
 
     Participant ``p`` gets list ``lists[p mod 2]``; its human-written words show writer
@@ -800,7 +800,7 @@ def readability_rows(config: StudyConfig, writers: Mapping[str, Sequence[str]]) 
 
     Parameters
     ----------
-    config : StudyConfig
+    config : StudySettings
         ``kind == "readability"``.
     writers : mapping of str to sequence of str
         Human writer ids available per word (at least one; the first ``human_writers`` in
@@ -824,7 +824,7 @@ def readability_rows(config: StudyConfig, writers: Mapping[str, Sequence[str]]) 
     return tuple(rows)
 
 
-def balance_notes(config: StudyConfig) -> list[str]:
+def balance_notes(config: StudySettings) -> list[str]:
     """Where the counterbalancing can only be near-exact with these numbers (one line each)."""
     notes = []
     if config.kind == "turing":
@@ -847,7 +847,7 @@ def balance_notes(config: StudyConfig) -> list[str]:
     return notes
 
 
-def design_rows(config: StudyConfig, writers: Mapping[str, Sequence[str]]) -> tuple[Row, ...]:
+def design_rows(config: StudySettings, writers: Mapping[str, Sequence[str]]) -> tuple[Row, ...]:
     """:func:`turing_rows` or :func:`readability_rows`, by ``config.kind``."""
     return (turing_rows if config.kind == "turing" else readability_rows)(config, writers)
 

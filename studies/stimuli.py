@@ -642,8 +642,8 @@ def generate_robot_words(
     -------
     dict of str to Path
     """
-    from prg.cli import compose_config
-    from prg.write import write
+    from prg.commands.cli import compose_config
+    from prg.commands.write import write
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -16,7 +16,7 @@ BIN = Path(sys.executable).parent
 
 def small_data_cfg(**overrides) -> dict:
     """The composed ``data`` node of conf/data/synthetic.yaml, shrunk for tests."""
-    from prg.cli import compose_config
+    from prg.commands.cli import compose_config
 
     cfg = compose_config(
         "prepare",
@@ -37,7 +37,7 @@ def untrained_muse_checkpoint(tmp_path_factory) -> Path:
     import torch
     from omegaconf import OmegaConf
 
-    from prg.cli import compose_config
+    from prg.commands.cli import compose_config
     from prg.models.module import PRGModule
 
     node = OmegaConf.to_container(

@@ -1,4 +1,4 @@
-"""All-or-nothing writes (prg.atomic) and signals held over the steps that must not be cut.
+"""All-or-nothing writes (prg.files) and signals held over the steps that must not be cut.
 
 A write is made to fail halfway for real: the kernel's file-size limit (RLIMIT_FSIZE) makes a
 write past it fail with EFBIG, the way a full disk fails with ENOSPC. Every writer of the project
@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from prg.atomic import (
+from prg.files import (
     atomic_path,
     remove_stale,
     staged_folder,

@@ -802,7 +802,7 @@ def _a_bug(cfg) -> None:
 def test_a_full_disk_is_one_line_exit_1_but_a_bug_keeps_its_traceback(
     task, one_line, tmp_path, monkeypatch, capfd, restore_logging
 ):
-    from prg.cli import hydra_command
+    from prg.commands.cli import hydra_command
 
     main = hydra_command(task, "prepare", "prg-x")
     monkeypatch.setattr(sys, "argv", ["prg-x", f"paths.root_dir={tmp_path}"])

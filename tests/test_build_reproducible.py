@@ -31,7 +31,7 @@ _BUILD = """
 import hashlib, json, sys
 import numpy as np
 from omegaconf import OmegaConf
-from prg.cli import compose_config
+from prg.commands.cli import compose_config
 from prg.data.build import build_dataset
 
 out, workers = sys.argv[1], int(sys.argv[2])

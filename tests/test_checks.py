@@ -13,7 +13,7 @@ import pytest
 from omegaconf import OmegaConf
 
 from prg.checks import RANGES, check_values, leaves, literal_text, literal_words, range_of
-from prg.cli import compose_config
+from prg.commands.cli import compose_config
 from prg.errors import UsageError
 from tests.test_bad_inputs import entry_point, restore_logging  # noqa: F401 (fixture)
 

@@ -13,7 +13,7 @@ from hypothesis.extra.numpy import arrays
 from prg.data.preprocess import normalise, resample_arclength
 from prg.errors import UsageError
 from prg.pipeline.connect import (
-    ConnectionParams,
+    ConnectionSettings,
     connect_letters,
     connect_sequence,
     connection_path,
@@ -22,7 +22,7 @@ from prg.pipeline.connect import (
 )
 from tests.conftest import letter_like
 
-P = ConnectionParams()
+P = ConnectionSettings()
 EPS = 1e-9
 
 
@@ -164,7 +164,7 @@ def test_letters_already_within_delta_need_no_connection():
 def test_defaults_are_those_of_connection_params():
     prev, nxt = PAIRS[2]
     a = connect_letters(prev, nxt)
-    b = connect_letters(prev, nxt, **ConnectionParams().as_kwargs())
+    b = connect_letters(prev, nxt, **ConnectionSettings().as_kwargs())
     np.testing.assert_array_equal(a.points, b.points)
 
 
@@ -337,7 +337,7 @@ def _same_result(a, b) -> None:
 
 
 def test_connect_sequence_passes_non_default_params_to_both_joiners():
-    params = ConnectionParams(delta=0.03, alpha_max=math.radians(30), theta_f=2.0, theta_p=1.5)
+    params = ConnectionSettings(delta=0.03, alpha_max=math.radians(30), theta_f=2.0, theta_p=1.5)
     letters = [PAIRS[5][0], PAIRS[5][1], PAIRS[5][1] + [2.5, 0.0], PAIRS[6][0] + [5.0, 0.0]]
     results = connect_sequence(letters, params, breaks=[False, True, False])
     _same_result(results[0], connect_letters(letters[0], letters[1], **params.as_kwargs()))

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from prg.cli import compose_config
-from prg.dictaphone import dictaphone
+from prg.commands.cli import compose_config
+from prg.commands.dictaphone import dictaphone
 from prg.errors import UsageError
 from prg.pipeline.speech import load_audio
 from prg.pipeline.word import WordTrajectory

@@ -11,8 +11,9 @@ import pytest
 import torch
 from mlflow import MlflowClient
 
-from prg.cli import compose_config
-from prg.evaluate import _subset, _test_data, evaluate
+from prg.commands.cli import compose_config
+from prg.commands.evaluate import _subset, _test_data, evaluate
+from prg.commands.train import train
 from prg.evaluation.classifiers import FOLD, load_classifier, predict
 from prg.evaluation.coherence import coherence_cells, per_class_rate
 from prg.evaluation.likelihood import MODEL_STD_SUFFIX, TABLE1_CELLS, estimate_cell
@@ -21,7 +22,6 @@ from prg.evaluation.smoothness import median_roughness
 from prg.models.checkpoint import load_model
 from prg.models.likelihoods import Likelihoods
 from prg.tracking import sqlite_uri
-from prg.train import train
 from tests.conftest import run_cli
 
 FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse")

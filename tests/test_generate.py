@@ -10,16 +10,10 @@ from prg.errors import UsageError
 from prg.models.avae import AVAE
 from prg.models.cvae import CVAE
 from prg.models.muse import MUSE
-from prg.pipeline.generate import (
-    GenerateParams,
-    clean_text,
-    decode_letters,
-    infer_text,
-    label_inputs,
-    rest_to_rest_samples,
-    usable_inputs,
-    write_word,
-)
+from prg.pipeline.decode import decode_letters, infer_text, label_inputs, usable_inputs
+from prg.pipeline.compose import GenerateSettings, clean_text
+from prg.pipeline.timing import rest_to_rest_samples
+from prg.pipeline.generate import write_word  # TODO
 
 
 def _inputs(n: int) -> dict[str, torch.Tensor]:
@@ -78,7 +72,7 @@ def test_rest_to_rest_timing_keeps_the_path_and_the_mean_speed():
 def test_a_word_is_laid_out_connected_and_reproduced_by_one_dmp():
     torch.manual_seed(0)
     word, path = write_word(
-        MUSE().eval(), "ab cd", label_inputs("ab cd"), GenerateParams(samples_per_s=150)
+        MUSE().eval(), "ab cd", label_inputs("ab cd"), GenerateSettings(samples_per_s=150)
     )
     assert [c for c, _ in word.letters] == list("abcd")
     assert word.segment_kinds.count("connection") == 2 and word.segment_kinds.count("space") == 1
@@ -153,6 +147,6 @@ def _probabilities(first: str, second: str) -> "torch.Tensor":
     ],
 )
 def test_letters_are_read_in_the_kind_of_their_word(first, second, meant):
-    from prg.pipeline.generate import read_in_context
+    from prg.pipeline.decode import read_in_context
 
     assert read_in_context(_probabilities(first, second)) == meant

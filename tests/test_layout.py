@@ -11,7 +11,7 @@ import pytest
 from prg.data.preprocess import normalise, resample_arclength
 from prg.errors import UsageError
 from prg.pipeline.layout import (
-    LayoutParams,
+    LayoutSettings,
     layout_letters,
     letter_band,
     place_letter,
@@ -19,7 +19,7 @@ from prg.pipeline.layout import (
 )
 from tests.conftest import letter_like
 
-P = LayoutParams()
+P = LayoutSettings()
 H = P.letter_height
 
 
@@ -63,7 +63,7 @@ def test_f_is_both_ascender_and_descender():
     assert letter_band("f") == pytest.approx((-P.descender * H, H))
     _, y0, _, y1 = box(place_letter(letter(5), "f", 0.0))
     assert (y0, y1) == pytest.approx((-P.descender * H, H))
-    print_f = LayoutParams(descenders="gjpqy")
+    print_f = LayoutSettings(descenders="gjpqy")
     assert letter_band("f", print_f) == pytest.approx((0.0, H))
 
 
@@ -129,9 +129,9 @@ def test_unsupported_characters_are_named():
 
 def test_bad_layout_values_are_named():
     with pytest.raises(UsageError, match="letter_height must be a positive"):
-        LayoutParams(letter_height=0.0)
+        LayoutSettings(letter_height=0.0)
     with pytest.raises(UsageError, match="gap must be a non-negative"):
-        LayoutParams(gap=-0.1)
+        LayoutSettings(gap=-0.1)
 
 
 def test_word_breaks_mark_pairs_separated_by_spaces():
@@ -141,12 +141,12 @@ def test_word_breaks_mark_pairs_separated_by_spaces():
 
 
 # ---- non-default parameters ------------------------------------------------------------------
-# The tests above use LayoutParams(); a formula that reads a default where it should read the
+# The tests above use LayoutSettings(); a formula that reads a default where it should read the
 # parameter is invisible there. Here every field differs from its default and the expected boxes
 # come from the rules of the module docstring, written out below.
 
 CUSTOM = [
-    LayoutParams(
+    LayoutSettings(
         letter_height=2.3,
         x_height=0.62,
         descender=0.3,
@@ -156,7 +156,7 @@ CUSTOM = [
         ascenders="bdhkl",
         descenders="gjpqyz",
     ),
-    LayoutParams(
+    LayoutSettings(
         letter_height=0.8,
         x_height=0.4,
         descender=0.6,
@@ -169,7 +169,7 @@ CUSTOM = [
 ]
 
 
-def expected_band(char: str, p: LayoutParams) -> tuple[float, float]:
+def expected_band(char: str, p: LayoutSettings) -> tuple[float, float]:
     full = char.isupper() or char.isdigit() or char in p.ascenders
     top = p.letter_height * (1.0 if full else p.x_height)
     bottom = -p.descender * p.letter_height if char in p.descenders else 0.0
@@ -202,14 +202,14 @@ def test_non_default_parameters_give_the_documented_bands_sizes_and_spacing(para
 
 
 def test_a_custom_ascender_set_replaces_the_default_one():
-    p = LayoutParams(ascenders="a", descenders="")
+    p = LayoutSettings(ascenders="a", descenders="")
     assert letter_band("a", p) == pytest.approx((0.0, p.letter_height))
     assert letter_band("t", p) == pytest.approx((0.0, p.x_height * p.letter_height))
     assert letter_band("g", p) == pytest.approx((0.0, p.x_height * p.letter_height))
 
 
 def test_zero_gap_descender_and_space_width_are_allowed():
-    p = LayoutParams(gap=0.0, descender=0.0, space_width=0.0)  # documented as >= 0
+    p = LayoutSettings(gap=0.0, descender=0.0, space_width=0.0)  # documented as >= 0
     placed = layout_letters([letter(1), letter(2), letter(3)], "g a b", p)
     boxes = [box(q) for q in placed]
     assert boxes[0][1] == pytest.approx(0.0)  # no descender depth

@@ -1,4 +1,4 @@
-"""``python -m prg.paper_scale`` (``make paper``): the whole path on the CPU with a tiny budget —
+"""``python -m prg.commands.paper_scale`` (``make paper``): the whole path on the CPU with a tiny budget —
 four concurrent trainings and the classifiers, then the evaluation into its own folder — and its
 failures: bad options (one line, exit 2, nothing started) and a training that fails (one line,
 exit 1, the other processes stopped)."""
@@ -47,7 +47,7 @@ TINY = [
 def _run(cwd: Path, *args: str, timeout: int = 300) -> subprocess.CompletedProcess:
     env = {k: v for k, v in os.environ.items() if k != "MLFLOW_TRACKING_URI"}
     return subprocess.run(
-        [sys.executable, "-m", "prg.paper_scale", *args],
+        [sys.executable, "-m", "prg.commands.paper_scale", *args],
         cwd=cwd,
         env={**env, "PYTHONUNBUFFERED": "1"},
         capture_output=True,
@@ -143,7 +143,7 @@ def test_bad_options_are_one_line_with_exit_2_before_anything_starts(
     assert exit_info.value.code == 2
     captured = capsys.readouterr()
     lines = captured.err.splitlines()
-    assert len(lines) == 1 and lines[0].startswith("prg.paper_scale: error: "), captured.err
+    assert len(lines) == 1 and lines[0].startswith("prg.commands.paper_scale: error: "), captured.err
     assert expected in lines[0]
     assert captured.out == ""
     assert list(tmp_path.iterdir()) == []  # no folder, no process
@@ -182,7 +182,7 @@ def test_a_failed_training_stops_the_others_and_fails_with_one_line(tmp_path, sm
     elapsed = time.monotonic() - start
     assert result.returncode == 2, result.stdout[-3000:] + result.stderr
     (line,) = result.stderr.splitlines()
-    assert line.startswith("prg.paper_scale: error: train: cvae failed (exit 2): ")
+    assert line.startswith("prg.commands.paper_scale: error: train: cvae failed (exit 2): ")
     assert "model.module.optimizer.lr must be a finite number in (0, 10], got -1" in line
     assert "stopped muse" in line and f"log: {root / 'logs' / 'train-cvae.log'}" in line
     assert elapsed < 120

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from prg.data.synthetic import SyntheticConfig, generate
+from prg.data.synthetic import SyntheticSettings, generate
 from prg.data.uji import format_uji
 from tests.conftest import run_cli
 
@@ -14,7 +14,7 @@ SMALL = ["data.synthetic.n_writers=6", "data.augment.per_class=2", "workers=1", 
 
 def _uji_file(path: Path, n_writers: int = 6) -> Path:
     """A UJI-format file from another 'writer': synthetic samples, odd cases mixed in."""
-    samples = generate(SyntheticConfig(n_writers=n_writers, seed=11))
+    samples = generate(SyntheticSettings(n_writers=n_writers, seed=11))
     text = format_uji(samples)
     extra = (
         "\n// a multi-stroke entry and characters outside the alphabet\n"

@@ -4,8 +4,8 @@ splits, the manifest, the figures and the DVC metrics, compared file by file (sh
 import hashlib
 from pathlib import Path
 
-from prg.cli import compose_config
-from prg.prepare import prepare
+from prg.commands.cli import compose_config
+from prg.commands.prepare import prepare
 
 SMALL = [
     "data.synthetic.n_writers=4",

@@ -2,7 +2,7 @@
 
 One section per part: resampling and normalisation (``prg.data.preprocess``,
 ``prg.pipeline.perceive``), rendering, connection strokes (``prg.pipeline.connect``), the DMP
-(``prg.pipeline.dmp``) and the whole word (``prg.pipeline.generate.compose_word``: layout,
+(``prg.pipeline.dmp``) and the whole word (``prg.pipeline.compose.compose_word``: layout,
 connections, timing and one DMP, fed with arbitrary normalised letters instead of a model). Each
 property is a guarantee the code documents — finite output, the documented shape and range, no
 gap or jump in a pen path — checked on inputs hypothesis makes up, including the awkward ones
@@ -49,7 +49,8 @@ from prg.data.preprocess import (
 from prg.errors import UsageError
 from prg.pipeline.connect import connect_letters, connection_path, straight_connection
 from prg.pipeline.dmp import fit_dmp, rollout
-from prg.pipeline.generate import GenerateParams, compose_word, rest_to_rest_samples
+from prg.pipeline.compose import GenerateSettings, compose_word
+from prg.pipeline.timing import rest_to_rest_samples
 from prg.pipeline.layout import layout_letters
 from prg.pipeline.perceive import perceive_trajectories
 
@@ -506,7 +507,7 @@ def test_a_word_from_any_letters_is_finite_continuous_and_bounded(data, method):
     chars = text.replace(" ", "")
     n_points = data.draw(st.sampled_from([2, 17, 100]))
     letters = np.stack([data.draw(normalised_letters(n_points)) for _ in chars])
-    params = GenerateParams(method=method)
+    params = GenerateSettings(method=method)
     word, path = compose_word(letters, text, params)
     points = word.points
     assert np.all(np.isfinite(points)) and np.all(np.isfinite(path))

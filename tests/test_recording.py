@@ -16,7 +16,8 @@ import torch
 
 from prg.errors import UsageError
 from prg.models.muse import MUSE
-from prg.pipeline.generate import decode_letters, label_inputs, write_word
+from prg.pipeline.decode import decode_letters, label_inputs
+from prg.pipeline.generate import write_word  # TODO
 from prg.recording import (
     distinct_colours,
     read_component,

@@ -6,8 +6,8 @@ import math
 import pytest
 import torch
 
+from prg.commands.evaluate import Evaluation, metrics_of
 from prg.data.alphabet import ALPHABET
-from prg.evaluate import Evaluation, metrics_of
 from prg.evaluation.coherence import folded_correct
 from prg.evaluation.reports import (
     PAPER_TABLE1,

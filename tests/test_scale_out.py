@@ -17,7 +17,7 @@ import pytest
 from hydra import compose, initialize_config_dir
 from mlflow import MlflowClient
 
-from prg.cli import config_dir
+from prg.commands.cli import config_dir
 from prg.tracking import sqlite_uri
 from tests.conftest import BIN, REPO, run_cli
 

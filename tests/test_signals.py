@@ -252,7 +252,7 @@ def _paper_scale(tmp, dataset, checkpoint):
     return [
         sys.executable,
         "-m",
-        "prg.paper_scale",
+        "prg.commands.paper_scale",
         "--profile",
         "converged",
         "--root",
@@ -272,7 +272,7 @@ COMMANDS = {
     "prg-dictaphone": _dictaphone,
     "prg-simulate": _simulate,
     "prg-study": _study,
-    "prg.paper_scale": _paper_scale,
+    "prg.commands.paper_scale": _paper_scale,
 }
 
 
@@ -286,7 +286,7 @@ def test_every_command_stops_on_a_signal(
     (out / "previous.txt").write_text("an earlier run's output\n")
     before = _tree_hashes(out, tmp_path / "models")
     argv = COMMANDS[command](tmp_path, dataset, untrained_muse_checkpoint)
-    ready = (lambda pid: bool(_descendants(pid))) if command == "prg.paper_scale" else None
+    ready = (lambda pid: bool(_descendants(pid))) if command == "prg.commands.paper_scale" else None
     code, err, left = signal_command(argv, sig, tmp_path, ready or (lambda pid: True))
     check(code, err, left, command, sig)
     after = {k: v for k, v in _tree_hashes(out, tmp_path / "models").items() if "/logs/" not in k}

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from prg.cli import compose_config
+from prg.commands.cli import compose_config
+from prg.commands.simulate import settings_from_config
 from prg.errors import UsageError
 from prg.recording import read_component, read_entities, read_times
 from prg.sim import (
@@ -27,7 +28,6 @@ from prg.sim import (
 )
 from prg.sim.geometry import bounding_box, runs
 from prg.sim.record import recording_urdf
-from prg.simulate import settings_from_config
 
 FLOAT32_M = 2e-6  # positions in the recording are float32 metres
 

@@ -29,10 +29,10 @@ OUTPUTS = {
 
 
 def simulate_cli(*args: str, env: dict | None = None):
-    """``prg-simulate ARGS`` (``python -m prg.simulate`` until the console script is installed)."""
+    """``prg-simulate ARGS`` (``python -m prg.commands.simulate`` until the console script is installed)."""
     if (BIN / "prg-simulate").exists():
         return run_cli("prg-simulate", "progress=false", *args, env=env)
-    return run_cli("python", "-m", "prg.simulate", "progress=false", *args, env=env)
+    return run_cli("python", "-m", "prg.commands.simulate", "progress=false", *args, env=env)
 
 
 @pytest.fixture(scope="module")
@@ -138,9 +138,9 @@ def test_bad_input_gets_one_line_exit_2_and_nothing_written(tmp_path, word_json,
 def test_the_task_refuses_bad_input_before_writing_anything(
     tmp_path, word_json, monkeypatch, args, message
 ):
-    from prg.cli import compose_config
+    from prg.commands.cli import compose_config
+    from prg.commands.simulate import simulate
     from prg.errors import UsageError
-    from prg.simulate import simulate
 
     monkeypatch.setenv("DISPLAY", "")
     bad = tmp_path / "bad.json"

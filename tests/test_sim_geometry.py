@@ -75,7 +75,7 @@ def _two_words() -> tuple:
 
 def test_pen_down_samples_are_false_only_on_the_travel_between_words():
     word, (end, start) = _two_words()
-    from prg.pipeline.generate import rest_to_rest_samples
+    from prg.pipeline.timing import rest_to_rest_samples
 
     samples, _ = rest_to_rest_samples(word.points, 2.0, 0.3, 200)
     down = pen_down_samples(word.points, word.segment, word.segment_kinds, samples)
@@ -147,7 +147,7 @@ def test_min_jerk_rests_at_both_ends():
 
 def test_plan_writes_each_word_as_a_stroke_with_pen_up_moves_around_it():
     word, _ = _two_words()
-    from prg.pipeline.generate import rest_to_rest_samples
+    from prg.pipeline.timing import rest_to_rest_samples
 
     samples, duration = rest_to_rest_samples(word.points, 2.0, 0.3, 60)
     t = np.linspace(0, duration, len(samples))

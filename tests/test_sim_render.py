@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from prg.cli import compose_config
+from prg.commands.cli import compose_config
+from prg.commands.simulate import settings_from_config
 from prg.sim import Scene
-from prg.simulate import settings_from_config
 
 EYE, TARGET = (-0.4, 1.0, 1.45), (0.42, 0.02, 0.85)  # docs/make_figures.py's 3/4 view
 

@@ -23,7 +23,7 @@ from prg.data.alphabet import text_to_labels
 from prg.errors import UsageError
 from prg.pipeline.speech import (
     SAMPLE_RATE,
-    SpeechParams,
+    SpeechSettings,
     Transcript,
     edit_distance,
     get_recogniser,
@@ -231,7 +231,7 @@ def test_letter_error_rate():
 
 
 def test_params_store_the_lexicon_as_a_tuple_without_duplicates():
-    params = SpeechParams(lexicon=["bell", " cat ", "bell"])
+    params = SpeechSettings(lexicon=["bell", " cat ", "bell"])
     assert params.lexicon == ("bell", "cat")
 
 
@@ -250,7 +250,7 @@ def test_params_store_the_lexicon_as_a_tuple_without_duplicates():
 )
 def test_bad_params_are_usage_errors(kwargs, fragment):
     with pytest.raises(UsageError, match=fragment):
-        SpeechParams(**kwargs)
+        SpeechSettings(**kwargs)
 
 
 # --------------------------------------------------------------------------------------------
@@ -312,7 +312,7 @@ def test_nan_audio():
 def test_noise_gives_no_usable_letters(whisper):
     noise = np.random.default_rng(0).normal(0, 0.05, 16000)
     with pytest.raises(UsageError, match=r"audio array \(whisper\): transcript '' has no letters"):
-        recognise(noise, SpeechParams(), sample_rate=16000)
+        recognise(noise, SpeechSettings(), sample_rate=16000)
 
 
 def test_unknown_backend_in_get_recogniser():
@@ -322,7 +322,7 @@ def test_unknown_backend_in_get_recogniser():
 
 @pytest.mark.parametrize("backend", ["whisper", "wav2vec2", "pocketsphinx"])
 def test_missing_model_folder(speech, tmp_path, backend):
-    params = SpeechParams(backend=backend, model=str(tmp_path / "no" / "such" / "model"))
+    params = SpeechSettings(backend=backend, model=str(tmp_path / "no" / "such" / "model"))
     with pytest.raises(UsageError, match="does not exist"):
         recognise(speech["bell"], params)
 
@@ -330,7 +330,7 @@ def test_missing_model_folder(speech, tmp_path, backend):
 def test_uncached_hub_model_is_not_downloaded(speech):
     """The default wav2vec2 model is not in the local cache here: a clear one-line error."""
     with pytest.raises(UsageError, match="nothing is downloaded") as info:
-        recognise(speech["bell"], SpeechParams(backend="wav2vec2"))
+        recognise(speech["bell"], SpeechSettings(backend="wav2vec2"))
     assert "\n" not in str(info.value)
 
 
@@ -367,13 +367,13 @@ def test_whisper_recognises_easy_words_without_lexicon(speech, whisper, word):
 
 @pytest.mark.parametrize("word", WORDS)
 def test_whisper_with_lexicon_hotwords_and_snapping(speech, whisper, word):
-    text, transcript = perceive_speech(speech[word], SpeechParams(lexicon=LEXICON))
+    text, transcript = perceive_speech(speech[word], SpeechSettings(lexicon=LEXICON))
     assert text == word == transcript.word
 
 
 @pytest.mark.parametrize("word", WORDS)
 def test_whisper_rescoring_picks_the_spoken_word(speech, whisper, word):
-    text, transcript = perceive_speech(speech[word], SpeechParams(lexicon=LEXICON, rescore=True))
+    text, transcript = perceive_speech(speech[word], SpeechSettings(lexicon=LEXICON, rescore=True))
     assert text == word
     assert transcript.candidates[0][0] == word
     scores = [score for _, score in transcript.candidates]
@@ -383,7 +383,7 @@ def test_whisper_rescoring_picks_the_spoken_word(speech, whisper, word):
 def test_whisper_rescoring_prunes_only_words_that_cannot_win(speech, whisper):
     """The pruned scores equal scoring each word alone, and the best is the exact argmax."""
     audio = load_audio(speech["bell"])
-    params = SpeechParams(lexicon=LEXICON, rescore=True)
+    params = SpeechSettings(lexicon=LEXICON, rescore=True)
     pruned = whisper.score(audio, LEXICON, params)
     alone = np.array([whisper.score(audio, [w], params)[0] for w in LEXICON[:3]])
     scored = ~np.isnan(pruned[:3])
@@ -394,19 +394,19 @@ def test_whisper_rescoring_prunes_only_words_that_cannot_win(speech, whisper):
 
 @pytest.mark.parametrize("variant", ["hello_44k_stereo", "hello_8k"])
 def test_whisper_on_other_rates_and_channels(speech, whisper, variant):
-    assert recognise(speech[variant], SpeechParams(lexicon=LEXICON)).word == "hello"
+    assert recognise(speech[variant], SpeechSettings(lexicon=LEXICON)).word == "hello"
 
 
 def test_whisper_on_an_array_with_its_rate(speech, whisper):
     x, rate = soundfile.read(str(speech["jump"]), dtype="int16")
-    transcript = recognise(x, SpeechParams(case="upper"), sample_rate=rate)
+    transcript = recognise(x, SpeechSettings(case="upper"), sample_rate=rate)
     assert transcript.word == "JUMP"
     assert transcript.audio_seconds == pytest.approx(len(x) / rate, abs=1e-3)
     assert transcript.seconds > 0
 
 
 def test_perceive_speech_returns_writable_text(speech, whisper):
-    text, transcript = perceive_speech(speech["cat"], SpeechParams(lexicon=LEXICON, case="title"))
+    text, transcript = perceive_speech(speech["cat"], SpeechSettings(lexicon=LEXICON, case="title"))
     assert text == "Cat"
     assert isinstance(transcript, Transcript)
     assert text_to_labels(text) == [12, 36, 55]
@@ -460,7 +460,7 @@ def wav2vec2_model(tmp_path_factory) -> str:
 
 def test_wav2vec2_pipeline_runs_on_resampled_stereo(speech, wav2vec2_model):
     """44.1 kHz stereo in; the processor (which refuses any rate but its own 16 kHz) runs."""
-    params = SpeechParams(backend="wav2vec2", model=wav2vec2_model)
+    params = SpeechSettings(backend="wav2vec2", model=wav2vec2_model)
     recogniser = get_recogniser("wav2vec2", wav2vec2_model)
     assert recogniser.processor.feature_extractor.sampling_rate == SAMPLE_RATE
     try:
@@ -475,7 +475,7 @@ def test_wav2vec2_pipeline_runs_on_resampled_stereo(speech, wav2vec2_model):
 
 
 def test_wav2vec2_rescoring_returns_a_lexicon_word(speech, wav2vec2_model):
-    params = SpeechParams(backend="wav2vec2", model=wav2vec2_model, lexicon=LEXICON, rescore=True)
+    params = SpeechSettings(backend="wav2vec2", model=wav2vec2_model, lexicon=LEXICON, rescore=True)
     text, transcript = perceive_speech(speech["bell"], params)
     assert text in LEXICON
     assert len(transcript.candidates) == 5
@@ -485,7 +485,7 @@ def test_wav2vec2_rescoring_returns_a_lexicon_word(speech, wav2vec2_model):
 def test_wav2vec2_model_at_another_rate_is_refused(speech, tmp_path):
     folder = tiny_wav2vec2(tmp_path / "w2v8k", sampling_rate=8000)
     with pytest.raises(UsageError, match="expects 8000 Hz audio: accepted are 16000 Hz models"):
-        recognise(speech["bell"], SpeechParams(backend="wav2vec2", model=str(folder)))
+        recognise(speech["bell"], SpeechSettings(backend="wav2vec2", model=str(folder)))
 
 
 # --------------------------------------------------------------------------------------------
@@ -495,12 +495,12 @@ def test_wav2vec2_model_at_another_rate_is_refused(speech, tmp_path):
 
 @pytest.mark.parametrize("word", ["bell", "jump", "hello", "window"])
 def test_pocketsphinx_grammar_recognises_lexicon_words(speech, word):
-    params = SpeechParams(backend="pocketsphinx", lexicon=LEXICON)
+    params = SpeechSettings(backend="pocketsphinx", lexicon=LEXICON)
     assert recognise(speech[word], params).word == word
 
 
 def test_pocketsphinx_grammar_answers_only_lexicon_words(speech):
-    params = SpeechParams(backend="pocketsphinx", lexicon=LEXICON)
+    params = SpeechSettings(backend="pocketsphinx", lexicon=LEXICON)
     for word in WORDS:
         try:
             assert recognise(speech[word], params).word in LEXICON
@@ -510,7 +510,7 @@ def test_pocketsphinx_grammar_answers_only_lexicon_words(speech):
 
 def test_pocketsphinx_default_language_model_runs(speech):
     try:
-        transcript = recognise(speech["window"], SpeechParams(backend="pocketsphinx"))
+        transcript = recognise(speech["window"], SpeechSettings(backend="pocketsphinx"))
     except UsageError as err:
         assert "(pocketsphinx): transcript '' has no letters" in str(err)
     else:
@@ -518,7 +518,7 @@ def test_pocketsphinx_default_language_model_runs(speech):
 
 
 def test_pocketsphinx_lexicon_word_missing_from_the_dictionary(speech):
-    params = SpeechParams(backend="pocketsphinx", lexicon=("bell", "zorbleflux"))
+    params = SpeechSettings(backend="pocketsphinx", lexicon=("bell", "zorbleflux"))
     with pytest.raises(UsageError, match="lexicon words 'zorbleflux' are not in the pocketsphinx"):
         recognise(speech["bell"], params)
 

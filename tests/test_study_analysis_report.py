@@ -17,7 +17,7 @@ from prg.errors import PRGError
 from studies.analysis import stats as S
 from studies.analysis.analyze import analyze_table
 from studies.analysis.commands import register
-from studies.analysis.config import AnalysisConfig
+from studies.analysis.config import AnalysisSettings
 from studies.analysis.report import build_report
 from studies.analysis.schema import STUDY1_COLUMNS
 from studies.analysis.simulate import simulate_turing
@@ -265,7 +265,7 @@ def test_a_failed_mixed_model_is_reported_not_raised(monkeypatch):
     )
     monkeypatch.setattr(S, "mixed_logit", lambda *a, **k: failed)
     table, _ = simulate_turing(20, 0.3, seed=3)
-    md = build_report(analyze_table(table, AnalysisConfig())).markdown()
+    md = build_report(analyze_table(table, AnalysisSettings())).markdown()
     assert (
         "> **Warning:** The crossed mixed logit (participants x words) could not be fitted: ValueError: no."
         in md

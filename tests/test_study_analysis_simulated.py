@@ -8,7 +8,7 @@ import pytest
 
 from studies.analysis import stats as S
 from studies.analysis.analyze import analyze_table
-from studies.analysis.config import AnalysisConfig
+from studies.analysis.config import AnalysisSettings
 from studies.analysis.simulate import (
     _moments,
     confidence_shift,
@@ -18,8 +18,8 @@ from studies.analysis.simulate import (
 )
 from studies.analysis.validate import analysis_rows, check_responses
 
-CFG = AnalysisConfig(margin=0.05, margin_source="preregistered", mixed_model=False)
-CFG2 = AnalysisConfig(margin=0.10, margin_source="preregistered", mixed_model=False)
+CFG = AnalysisSettings(margin=0.05, margin_source="preregistered", mixed_model=False)
+CFG2 = AnalysisSettings(margin=0.10, margin_source="preregistered", mixed_model=False)
 
 
 def turing_rows(**kw):

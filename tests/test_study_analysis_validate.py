@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 from prg.errors import UsageError
-from studies.analysis.config import AnalysisConfig, load_config, with_overrides
+from studies.analysis.config import AnalysisSettings, load_config, with_overrides
 from studies.analysis.schema import COLUMNS, STUDY1_COLUMNS, STUDY2_COLUMNS
 from studies.analysis.simulate import simulate_readability, simulate_turing
 from studies.analysis.validate import (
@@ -283,11 +283,11 @@ def test_bad_config_values_name_the_file_and_key(tmp_path, text, message):
 
 def test_command_line_overrides_are_checked_and_mark_the_margin_unstated():
     cfg = with_overrides(
-        AnalysisConfig(margin=0.05, margin_source="preregistered"), margin=0.08, alpha=0.1
+        AnalysisSettings(margin=0.05, margin_source="preregistered"), margin=0.08, alpha=0.1
     )
     assert (cfg.margin, cfg.alpha, cfg.margin_source) == (0.08, 0.1, "unstated")
     with pytest.raises(UsageError, match=r"--alpha 0.7 is outside"):
-        with_overrides(AnalysisConfig(), alpha=0.7)
+        with_overrides(AnalysisSettings(), alpha=0.7)
 
 
 def test_the_study_configs_in_conf_read_as_their_kind():
@@ -297,7 +297,7 @@ def test_the_study_configs_in_conf_read_as_their_kind():
 
 
 def test_a_chance_of_one_in_k_allows_k_samples_per_trial(turing_table):
-    cfg = with_overrides(AnalysisConfig(), chance=1 / 6)
+    cfg = with_overrides(AnalysisSettings(), chance=1 / 6)
     assert cfg.n_options == 6
     t = turing_table.copy()
     i = t.index[t.is_attention_check == "false"][0]

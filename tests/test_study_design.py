@@ -284,10 +284,10 @@ def test_the_analysis_reads_the_same_study_files():
 
 
 def test_typed_words_are_compared_as_the_analysis_compares_them():
-    from studies.analysis.schema import normalize_text
+    from studies.analysis.schema import normalise_text
 
     for text in ["Cat", "  cat ", "c a t", "CAT\t", "ca  t", ""]:
-        assert normalise_answer(text) == normalize_text(text)
+        assert normalise_answer(text) == normalise_text(text)
 
 
 def test_overrides_change_nested_settings(tmp_path):

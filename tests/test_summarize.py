@@ -210,7 +210,7 @@ def _converged_root(tmp_path, status: str = "ok") -> Path:
     run = {
         "status": status,
         "profile": "converged",
-        "command": "python -m prg.paper_scale --profile converged --device auto",
+        "command": "python -m prg.commands.paper_scale --profile converged --device auto",
         "device": "a test CPU",
         "cpu_count": 2,
         "total_seconds": 3000.0,
@@ -235,7 +235,7 @@ def test_the_converged_snapshot_shows_its_command_costs_and_tables(tmp_path):
     assert "No converged snapshot yet" in summarize.converged_markdown(out)
     summarize.snapshot_converged(_converged_root(tmp_path), out)
     text = summarize.converged_markdown(out)
-    assert "`python -m prg.paper_scale --profile converged --device auto`" in text
+    assert "`python -m prg.commands.paper_scale --profile converged --device auto`" in text
     assert "PRG_MUSE(T,S,I) 10.0 min CPU (7 epochs)" in text
     assert "on 100 test samples for Table I and all for coherence" in text
     assert TABLE1 in text and COHERENCE in text and "**Missing-modality robustness**" in text

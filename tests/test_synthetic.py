@@ -2,12 +2,12 @@ import numpy as np
 import pytest
 
 from prg.data.alphabet import ALPHABET
-from prg.data.synthetic import SyntheticConfig, generate, join_strokes, writer_styles
+from prg.data.synthetic import SyntheticSettings, generate, join_strokes, writer_styles
 from prg.errors import UsageError
 
 
 def test_shape_mirrors_uji_writers_sessions_characters():
-    cfg = SyntheticConfig(n_writers=5, samples_per_char=2)
+    cfg = SyntheticSettings(n_writers=5, samples_per_char=2)
     samples = generate(cfg)
     assert len(samples) == 5 * 2 * 62
     assert {s.char for s in samples} == set(ALPHABET)
@@ -18,15 +18,15 @@ def test_shape_mirrors_uji_writers_sessions_characters():
 
 
 def test_deterministic_for_a_seed_and_different_for_another():
-    a = generate(SyntheticConfig(n_writers=2, seed=3))
-    b = generate(SyntheticConfig(n_writers=2, seed=3))
-    c = generate(SyntheticConfig(n_writers=2, seed=4))
+    a = generate(SyntheticSettings(n_writers=2, seed=3))
+    b = generate(SyntheticSettings(n_writers=2, seed=3))
+    c = generate(SyntheticSettings(n_writers=2, seed=4))
     assert all(np.array_equal(x.strokes[0], y.strokes[0]) for x, y in zip(a, b))
     assert not all(np.array_equal(x.strokes[0], y.strokes[0]) for x, y in zip(a, c))
 
 
 def test_writers_have_distinct_styles_and_fonts_rotate():
-    styles = writer_styles(SyntheticConfig(n_writers=8))
+    styles = writer_styles(SyntheticSettings(n_writers=8))
     assert [s.font for s in styles[:4]] == ["futural", "rowmans", "scripts", "cursive"]
     assert len({round(s.slant, 6) for s in styles}) == 8
 
@@ -34,7 +34,7 @@ def test_writers_have_distinct_styles_and_fonts_rotate():
 def test_two_sessions_of_a_writer_differ_less_than_two_writers():
     from prg.data.preprocess import preprocess_stroke
 
-    samples = generate(SyntheticConfig(n_writers=8, characters="a"))
+    samples = generate(SyntheticSettings(n_writers=8, characters="a"))
     traj = {(s.writer, s.session[-1]): preprocess_stroke(s.strokes[0]) for s in samples}
     same = [np.abs(traj[(w, "1")] - traj[(w, "2")]).mean() for w in {k[0] for k in traj}]
     # writers 1 and 5 share a font (futural), so the comparison isolates the personal style
@@ -68,4 +68,4 @@ def test_join_drops_dots_and_prefers_short_pen_travel():
 )
 def test_bad_settings_are_named(kwargs, match):
     with pytest.raises(UsageError, match=match):
-        SyntheticConfig(**kwargs)
+        SyntheticSettings(**kwargs)

@@ -6,9 +6,9 @@ import pytest
 import torch
 from mlflow import MlflowClient
 
-from prg.cli import compose_config
+from prg.commands.cli import compose_config
+from prg.commands.train import train
 from prg.tracking import sqlite_uri
-from prg.train import train
 from tests.conftest import run_cli
 
 FAST = [

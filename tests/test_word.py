@@ -11,13 +11,13 @@ from PIL import Image
 
 from prg.data.preprocess import normalise, resample_arclength
 from prg.errors import UsageError
-from prg.pipeline.connect import ConnectionParams, connect_sequence
+from prg.pipeline.connect import ConnectionSettings, connect_sequence
 from prg.pipeline.layout import layout_letters, word_breaks
 from prg.pipeline.word import WordTrajectory, _atomic_write, assemble_word
 from tests.conftest import letter_like
 
 TEXT = "ab cd"
-DELTA = ConnectionParams().delta
+DELTA = ConnectionSettings().delta
 
 
 def letters_cm(text: str = TEXT, seed: int = 0) -> list[np.ndarray]:

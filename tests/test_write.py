@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 from mlflow import MlflowClient
 
-from prg.cli import compose_config
+from prg.commands.cli import compose_config
+from prg.commands.write import write
 from prg.errors import UsageError
 from prg.pipeline.word import WordTrajectory
 from prg.recording import read_entities, read_times
 from prg.tracking import sqlite_uri
-from prg.write import write
 from tests.conftest import run_cli
 
 

@@ -40,3 +40,18 @@ class DataFormatError(UsageError):
 
 class DownloadError(PRGError):
     """A download failed or its checksum did not match; nothing was written."""
+
+
+class SettingsError(UsageError):
+    """A settings value a library dataclass refuses; names the field (``lift_cm``), not the config
+    path: the command layer that read the value adds its path with :meth:`under`
+    (``motion.lift_cm``), so the library does not know the layout of the config tree."""
+
+    def __init__(self, field: str, problem: str):
+        super().__init__(f"{field} {problem}")
+        self.field = field
+        self.problem = problem
+
+    def under(self, prefix: str | None) -> SettingsError:
+        """The same error with ``prefix.`` before the field (unchanged for an empty prefix)."""
+        return SettingsError(f"{prefix}.{self.field}" if prefix else self.field, self.problem)

@@ -73,8 +73,8 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
-from prg.atomic import atomic_path
 from prg.errors import UsageError
+from prg.files import atomic_path
 from prg.pipeline.word import WordTrajectory
 
 log = logging.getLogger(__name__)

@@ -1,8 +1,8 @@
 """Signals as exceptions: SIGINT, SIGTERM and SIGHUP raise :class:`Interrupted` in the main
 thread while :func:`raising_signals` is active (every command runs inside it, see
-:func:`prg.cli.handle_signals`).
+:func:`prg.commands.cli.handle_signals`).
 
-The exception unwinds the work like any error: staged outputs are removed (:mod:`prg.atomic`),
+The exception unwinds the work like any error: staged outputs are removed (:mod:`prg.files`),
 pools stop their workers, Lightning tears its trainer down. Short steps that must not be cut in
 two (moving finished outputs into place, starting a child process and recording it so it can be
 stopped) run inside :func:`deferred`: a signal that arrives there is raised when the step ends.

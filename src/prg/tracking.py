@@ -17,7 +17,6 @@ exports its id in ``PRG_PARENT_RUN_ID``; each job's run is tagged ``mlflow.paren
 
 from __future__ import annotations
 
-import hashlib
 import os
 import tempfile
 import time
@@ -135,10 +134,6 @@ def mlflow_logger(
         tags=None if run_id else tags,
         log_model=False,
     )
-
-
-def file_sha256(path: str | os.PathLike) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 def flatten(cfg: Any, prefix: str = "") -> dict[str, Any]:

@@ -24,7 +24,7 @@ _EXPORTS = {
     "load_responses": "validate",
     "analysis_rows": "validate",
     "ResponseFileError": "validate",
-    "AnalysisConfig": "config",
+    "AnalysisSettings": "config",
     "load_config": "config",
     "analyze_file": "analyze",
     "analyze_turing": "analyze",

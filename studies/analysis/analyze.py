@@ -22,7 +22,7 @@ import pandas as pd
 
 from prg.errors import UsageError
 from studies.analysis import stats as S
-from studies.analysis.config import AnalysisConfig
+from studies.analysis.config import AnalysisSettings
 from studies.analysis.schema import READABILITY, TURING
 from studies.analysis.validate import (
     Responses,
@@ -42,7 +42,7 @@ class StudyAnalysis:
 
     kind: str
     margin: float
-    config: AnalysisConfig
+    config: AnalysisSettings
     data: pd.DataFrame
     tests: pd.DataFrame
     per_word: pd.DataFrame
@@ -60,7 +60,7 @@ class Analysis:
     """A whole responses file analysed."""
 
     source: str
-    config: AnalysisConfig
+    config: AnalysisSettings
     notes: list[str]
     attention: pd.DataFrame
     rows_in_file: int
@@ -92,14 +92,14 @@ def _p(p: float) -> str:
     return "p = n/a" if not np.isfinite(p) else (f"p = {p:.2g}" if p < 0.001 else f"p = {p:.3f}")
 
 
-def analyze_turing(data: pd.DataFrame, cfg: AnalysisConfig) -> StudyAnalysis:
+def analyze_turing(data: pd.DataFrame, cfg: AnalysisSettings) -> StudyAnalysis:
     """Study 1: H1 (can participants pick the robot's sample above chance?) and H2 (confidence).
 
     Parameters
     ----------
     data : DataFrame
         Analysed rows: participant_id, word, chose_robot (0/1), confidence (1-5).
-    cfg : AnalysisConfig
+    cfg : AnalysisSettings
         chance, margin, alpha, neutral, margin_source, mixed_model.
     """
     c, a, margin = cfg.chance, cfg.alpha, cfg.margin_for(TURING)
@@ -341,14 +341,14 @@ def _reasons(*rows: pd.Series | None) -> str:
     return "; ".join(out) or "no test could be run"
 
 
-def analyze_readability(data: pd.DataFrame, cfg: AnalysisConfig) -> StudyAnalysis:
+def analyze_readability(data: pd.DataFrame, cfg: AnalysisSettings) -> StudyAnalysis:
     """Study 2: is the robot's writing as readable as the human's?
 
     Parameters
     ----------
     data : DataFrame
         Analysed rows: participant_id, word, writer (human/robot), correct (0/1).
-    cfg : AnalysisConfig
+    cfg : AnalysisSettings
         margin, alpha, margin_source, mixed_model.
     """
     a, margin = cfg.alpha, cfg.margin_for(READABILITY)
@@ -552,17 +552,17 @@ def _readability_verdict(
     return verdict, lines, contrasts
 
 
-def analyze_file(path: str, cfg: AnalysisConfig) -> Analysis:
+def analyze_file(path: str, cfg: AnalysisSettings) -> Analysis:
     """Read, check and analyse a responses CSV (every study it holds, or ``cfg.kind`` only)."""
     return _analyze(load_responses(path, kind=cfg.kind, n_options=cfg.n_options), cfg)
 
 
-def analyze_table(table: pd.DataFrame, cfg: AnalysisConfig, name: str = "responses") -> Analysis:
+def analyze_table(table: pd.DataFrame, cfg: AnalysisSettings, name: str = "responses") -> Analysis:
     """Check and analyse a responses table in memory (e.g. straight from the simulator)."""
     return _analyze(check_responses(table, name, kind=cfg.kind, n_options=cfg.n_options), cfg)
 
 
-def _analyze(resp: Responses, cfg: AnalysisConfig) -> Analysis:
+def _analyze(resp: Responses, cfg: AnalysisSettings) -> Analysis:
     notes = list(cfg.notes) + list(resp.notes)
     studies = []
     att = attention_summary(resp.frame)

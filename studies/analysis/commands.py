@@ -27,9 +27,9 @@ import math
 import sys
 from pathlib import Path
 
-from prg.atomic import atomic_path
-from prg.cli import check_output
+from prg.commands.cli import check_output
 from prg.errors import UsageError
+from prg.files import atomic_path
 
 KINDS = ("turing", "readability")
 MAX_SIMULATED_ROWS = 1_000_000  #: about 20 s and 100 MB of CSV

@@ -31,7 +31,7 @@ MARGIN_SOURCES = ("preregistered", "data", "unstated", "default")
 
 
 @dataclass(frozen=True)
-class AnalysisConfig:
+class AnalysisSettings:
     """Options of one analysis run (see the module docstring for the YAML keys)."""
 
     kind: str | None = None
@@ -68,7 +68,7 @@ def _number(value: Any, key: str, path: str, low: float, high: float) -> float:
     return x
 
 
-def load_config(path: str | Path | None) -> AnalysisConfig:
+def load_config(path: str | Path | None) -> AnalysisSettings:
     """Read the analysis options from a study YAML (``None``: all defaults).
 
     Raises
@@ -77,7 +77,7 @@ def load_config(path: str | Path | None) -> AnalysisConfig:
         The file is missing, is not YAML, or a known key has a value out of range.
     """
     if path is None:
-        return AnalysisConfig()
+        return AnalysisSettings()
     import yaml
 
     p = Path(path)
@@ -103,7 +103,7 @@ def load_config(path: str | Path | None) -> AnalysisConfig:
     return config_from_mapping(node, str(path))
 
 
-def config_from_mapping(node: dict[str, Any], path: str = "config") -> AnalysisConfig:
+def config_from_mapping(node: dict[str, Any], path: str = "config") -> AnalysisSettings:
     """Build the options from a plain mapping (the YAML's keys); unknown keys are ignored."""
     notes: list[str] = []
     kind = None
@@ -148,7 +148,7 @@ def config_from_mapping(node: dict[str, Any], path: str = "config") -> AnalysisC
     exclude = node.get("exclude_failed_attention", True)
     if not isinstance(exclude, bool):
         raise UsageError(f"{path}: exclude_failed_attention must be true or false, got {exclude!r}")
-    return AnalysisConfig(
+    return AnalysisSettings(
         kind=kind,
         name=str(node["name"]) if node.get("name") is not None else None,
         margin=margin,
@@ -164,7 +164,7 @@ def config_from_mapping(node: dict[str, Any], path: str = "config") -> AnalysisC
     )
 
 
-def with_overrides(cfg: AnalysisConfig, **overrides: Any) -> AnalysisConfig:
+def with_overrides(cfg: AnalysisSettings, **overrides: Any) -> AnalysisSettings:
     """``cfg`` with the command line's values (``None`` means: not given) checked and applied."""
     given = {k: v for k, v in overrides.items() if v is not None}
     if "margin_source" in given and given["margin_source"] not in MARGIN_SOURCES[:2]:

@@ -28,8 +28,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from prg.atomic import staged_folder
 from prg.errors import UsageError
+from prg.files import staged_folder
+from prg.plotting import pyplot
 from studies.analysis.analyze import Analysis, StudyAnalysis
 from studies.analysis.schema import TURING
 
@@ -203,28 +204,18 @@ def tests_table(tests: pd.DataFrame, digits: int = 3) -> pd.DataFrame:
 def _png(fig) -> bytes:
     import io
 
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
     plt.close(fig)
     return buf.getvalue()
 
 
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def fig_turing_words(
     per_word: pd.DataFrame, chance: float, margin: float, overall: tuple[float, float, float] | None
 ):
     """Per-word rates of picking the robot, Wilson CIs, chance and the equivalence band."""
-    plt = _plt()
+    plt = pyplot()
     pw = per_word.sort_values("rate")
     fig, ax = plt.subplots(figsize=(6.4, 0.35 * len(pw) + 1.6))
     y = np.arange(len(pw))
@@ -257,7 +248,7 @@ def fig_turing_words(
 
 def fig_turing_participants(per_part: pd.DataFrame, chance: float):
     """Histogram of the participants' rates of picking the robot."""
-    plt = _plt()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 3.0))
     bins = np.arange(-0.025, 1.026, 0.05)  # centred on multiples of 0.05 (rates of 10 or 20 trials)
     ax.hist(per_part["rate"], bins=bins, color="#8899cc", edgecolor="white")
@@ -271,7 +262,7 @@ def fig_turing_participants(per_part: pd.DataFrame, chance: float):
 
 def fig_confidence(data: pd.DataFrame, neutral: float):
     """Confidence ratings (by whether the robot was picked) and participant mean confidence."""
-    plt = _plt()
+    plt = pyplot()
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.2))
     levels = np.arange(1, 6)
     width = 0.4
@@ -307,7 +298,7 @@ def fig_readability(per_word: pd.DataFrame, data: pd.DataFrame):
     """Success rate per writer (Wilson CI) and per word, human vs robot."""
     from studies.analysis.stats import proportion_ci
 
-    plt = _plt()
+    plt = pyplot()
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.6), gridspec_kw={"width_ratios": [1, 2.2]})
     colors = {"human": "#b07030", "robot": "#33338f"}
     for i, w in enumerate(("human", "robot")):
@@ -352,7 +343,7 @@ def fig_readability(per_word: pd.DataFrame, data: pd.DataFrame):
 
 def fig_differences(per_part: pd.DataFrame, margin: float, diff: tuple[float, float, float] | None):
     """Participants' robot-minus-human differences with the equivalence band."""
-    plt = _plt()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 3.0))
     d = per_part["difference"].dropna() if "difference" in per_part else pd.Series(dtype=float)
     ax.axvspan(-margin, margin, color="#cfe8cf", label=f"equivalence band ±{margin:g}")

@@ -152,6 +152,6 @@ def kind_from_columns(columns: list[str] | tuple[str, ...]) -> str | None:
     return None
 
 
-def normalize_text(text: str) -> str:
+def normalise_text(text: str) -> str:
     """How typed text is compared with the word: trimmed, case-folded, inner spaces collapsed."""
     return " ".join(str(text).split()).casefold()

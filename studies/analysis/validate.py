@@ -29,7 +29,7 @@ from studies.analysis.schema import (
     TRUE_STRINGS,
     TURING,
     kind_from_columns,
-    normalize_text,
+    normalise_text,
     study_kind,
 )
 
@@ -260,7 +260,7 @@ def _check_rows(
         derived = None
         if typed is not None:
             derived = pd.Series(
-                [float(normalize_text(t) == normalize_text(w)) for t, w in zip(typed, df["word"])],
+                [float(normalise_text(t) == normalise_text(w)) for t, w in zip(typed, df["word"])],
                 index=df.index,
             )
         if "correct" in df:

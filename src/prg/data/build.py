@@ -21,7 +21,6 @@ import numpy as np
 from tqdm.auto import tqdm
 
 import prg
-from prg.atomic import atomic_path, json_text, staged_folder, write_json, write_text
 from prg.data.alphabet import ALPHABET, char_to_label
 from prg.data.preprocess import TRAJ_LAYOUT, preprocess_stroke, render_batch
 from prg.data.samples import RawSample
@@ -29,6 +28,7 @@ from prg.data.splits import SPLITS, split_writers
 from prg.data.store import save_split
 from prg.data.uji import select_single_stroke_alphabet
 from prg.errors import UsageError
+from prg.files import atomic_path, json_text, sha256_file, staged_folder, write_json, write_text
 from prg.signals import deferred
 
 log = logging.getLogger(__name__)
@@ -82,7 +82,7 @@ def load_raw_samples(
     """Read the configured source; returns the raw samples and a description of the input."""
     source = data.get("source")
     if source == "synthetic":
-        from prg.data.synthetic import SyntheticConfig, generate
+        from prg.data.synthetic import SyntheticSettings, generate
 
         syn = dict(data.get("synthetic") or {})
         for key in ("fonts", "slant", "width", "size", "rotation_deg", "roundness", "jitter"):
@@ -90,7 +90,7 @@ def load_raw_samples(
                 syn[key] = tuple(syn[key])
         syn.setdefault("seed", data.get("seed", 0))
         try:
-            cfg = SyntheticConfig(**syn)
+            cfg = SyntheticSettings(**syn)
         except TypeError as err:
             raise UsageError(f"data.synthetic: {err}") from None
         _positive_int(cfg.n_writers, "data.synthetic.n_writers")
@@ -98,7 +98,7 @@ def load_raw_samples(
         samples = generate(cfg)
         return samples, {"kind": "synthetic", "sha256": cfg.fingerprint(), "path": None}
     if source == "uji":
-        from prg.data.download import UJI_SHA256, UJI_URL, resolve_uji_path, sha256_file
+        from prg.data.download import UJI_SHA256, UJI_URL, resolve_uji_path
         from prg.data.uji import read_uji
 
         path = resolve_uji_path(

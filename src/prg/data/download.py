@@ -22,9 +22,9 @@ from typing import BinaryIO
 
 from tqdm import tqdm
 
-from prg.atomic import remove_stale
 from prg.data.uji import UJI_MEMBER, find_member
 from prg.errors import DownloadError, UsageError
+from prg.files import remove_stale, sha256_file
 
 UJI_URL = "https://archive.ics.uci.edu/static/public/177/uji+pen+characters+version+2.zip"
 """The UCI ML repository archive of UJI Pen Characters (Version 2), dataset 177 (CC BY 4.0)."""
@@ -63,17 +63,8 @@ def check_sha256(value: str | None) -> str | None:
     return digest
 
 
-def sha256_file(path: Path) -> str:
-    """Hex SHA-256 of a file's bytes."""
-    digest = hashlib.sha256()
-    with Path(path).open("rb") as handle:
-        while chunk := handle.read(_CHUNK):
-            digest.update(chunk)
-    return digest.hexdigest()
-
-
 def _temp_beside(dest: Path) -> tuple[BinaryIO, Path]:
-    """An open, hidden temporary file in ``dest``'s folder, named the way :mod:`prg.atomic` names
+    """An open, hidden temporary file in ``dest``'s folder, named the way :mod:`prg.files` names
     them (a killed download's file is removed by the next write there)."""
     dest.parent.mkdir(parents=True, exist_ok=True)
     remove_stale(dest.parent)

@@ -7,18 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from prg.atomic import atomic_path
 from prg.data.alphabet import ALPHABET
-
-
-def pyplot():
-    """matplotlib's pyplot on the non-interactive Agg backend (headless, no display needed)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+from prg.files import atomic_path
+from prg.plotting import pyplot
 
 
 def _save(fig, path: Path) -> None:

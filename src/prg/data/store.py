@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from prg.atomic import atomic_path
 from prg.errors import UsageError
+from prg.files import atomic_path
 
 SPLIT_KEYS = ("traj", "image", "label", "writer", "augmented", "parent")
 _FIXED_DATE = (1980, 1, 1, 0, 0, 0)

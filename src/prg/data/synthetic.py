@@ -39,7 +39,7 @@ FONTS: tuple[str, ...] = ("futural", "rowmans", "scripts", "cursive")
 
 
 @dataclass(frozen=True)
-class SyntheticConfig:
+class SyntheticSettings:
     """Settings of the synthetic source (``data.synthetic`` in the Hydra config)."""
 
     n_writers: int = 60
@@ -167,7 +167,7 @@ def _greedy_order(strokes: list[np.ndarray]) -> list[np.ndarray]:
     return order
 
 
-def writer_styles(cfg: SyntheticConfig) -> list[WriterStyle]:
+def writer_styles(cfg: SyntheticSettings) -> list[WriterStyle]:
     """One style per writer, deterministic for ``cfg.seed``."""
     rng = np.random.default_rng(np.random.SeedSequence([cfg.seed, 0x57]))
     styles = []
@@ -239,7 +239,7 @@ def style_stroke(
     return np.column_stack([cos * x - sin * y, sin * x + cos * y]) * style.size
 
 
-def generate(cfg: SyntheticConfig) -> list[RawSample]:
+def generate(cfg: SyntheticSettings) -> list[RawSample]:
     """All synthetic raw samples: writers x characters x sessions, deterministic for the seed.
 
     Returns

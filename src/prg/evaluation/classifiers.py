@@ -32,10 +32,10 @@ import torch
 from torch import nn
 from tqdm.auto import tqdm
 
-from prg.atomic import write_bytes, write_json
 from prg.data.alphabet import ALPHABET, NUM_CLASSES
 from prg.data.store import load_split
 from prg.errors import UsageError
+from prg.files import write_bytes, write_json
 
 log = logging.getLogger(__name__)
 

@@ -100,7 +100,7 @@ _TINY = 1e-12
 
 
 @dataclass(frozen=True)
-class ConnectionParams:
+class ConnectionSettings:
     """Parameters of :func:`connect_letters` (lengths in centimetres, angles in radians).
 
     Defaults are tuned for letters 0.75 cm (x-height) to 1.5 cm (full height) tall, laid out by
@@ -153,7 +153,7 @@ class ConnectionParams:
         return asdict(self)
 
 
-_DEFAULT = ConnectionParams()
+_DEFAULT = ConnectionSettings()
 
 
 @dataclass(frozen=True)
@@ -302,7 +302,7 @@ def connect_letters(
     nxt : ndarray, shape (m, 2)
         Letter ``i + 1`` (one candidate per point).
     delta, alpha_max, theta_o, theta_a, theta_f, theta_p, home_radius, max_steps, join
-        See :class:`ConnectionParams` (defaults from there).
+        See :class:`ConnectionSettings` (defaults from there).
 
     Returns
     -------
@@ -413,7 +413,7 @@ def connection_path(prev, result: ConnectionResult, nxt) -> np.ndarray:
 
 def connect_sequence(
     letters,
-    params: ConnectionParams | None = None,
+    params: ConnectionSettings | None = None,
     method: Literal["alg1", "straight"] = "alg1",
     breaks=None,
 ) -> list[ConnectionResult]:
@@ -423,8 +423,8 @@ def connect_sequence(
     ----------
     letters : sequence of ndarray, each shape (n_i, 2)
         Letters in writing order, already laid out (centimetres).
-    params : ConnectionParams, optional
-        Defaults to ``ConnectionParams()``.
+    params : ConnectionSettings, optional
+        Defaults to ``ConnectionSettings()``.
     method : {"alg1", "straight"}
         :func:`connect_letters` or :func:`straight_connection` (which uses only ``params.delta``).
     breaks : sequence of bool, optional
@@ -436,7 +436,7 @@ def connect_sequence(
     -------
     list of ConnectionResult, length ``len(letters) - 1``
     """
-    params = params or ConnectionParams()
+    params = params or ConnectionSettings()
     if method not in ("alg1", "straight"):
         raise UsageError(f"method must be 'alg1' or 'straight', got {method!r}")
     n_pairs = max(len(letters) - 1, 0)

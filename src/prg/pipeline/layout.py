@@ -13,7 +13,7 @@ Letters arrive as the models decode them: 100 points, normalised by
 :func:`prg.data.preprocess.normalise` (centred on the mean point, largest absolute coordinate 1,
 **y up**). They leave in centimetres, left to right, the baseline at ``y = 0``.
 
-Height classes (``H`` = ``LayoutParams.letter_height``):
+Height classes (``H`` = ``LayoutSettings.letter_height``):
 
 * **full**: uppercase, digits and the ascenders ``b d f h k l t``: bounding box from ``0`` to
   ``H``;
@@ -23,7 +23,7 @@ Height classes (``H`` = ``LayoutParams.letter_height``):
 * ``f`` is in both of the paper's lists (ascender and descender). We follow the paper literally:
   ``f`` spans ``-descender * H`` to ``H``, the looped cursive ``f`` of the UJI writers and the
   synthetic script fonts. A print ``f`` without a tail would be stretched down; put ``f`` in
-  ``LayoutParams.descenders`` or not to choose.
+  ``LayoutSettings.descenders`` or not to choose.
 
 Each letter is scaled uniformly (aspect ratio kept) so that its bounding-box height is its class
 height, unless that would make it wider than ``max_width * H``; then it is scaled to that width
@@ -49,7 +49,7 @@ _EPS = 1e-9
 
 
 @dataclass(frozen=True)
-class LayoutParams:
+class LayoutSettings:
     """Sizes of the word layout, in centimetres (ratios relative to ``letter_height``).
 
     Attributes
@@ -94,20 +94,20 @@ class LayoutParams:
                 raise UsageError(f"layout {name} must be a non-negative number, got {value!r}")
 
 
-def letter_band(char: str, params: LayoutParams | None = None) -> tuple[float, float]:
+def letter_band(char: str, params: LayoutSettings | None = None) -> tuple[float, float]:
     """Bottom and top (cm, baseline at 0) of a character's bounding box.
 
     Parameters
     ----------
     char : str
         One supported character (0-9, A-Z, a-z).
-    params : LayoutParams, optional
+    params : LayoutSettings, optional
 
     Returns
     -------
     (bottom, top) : tuple of float
     """
-    p = params or LayoutParams()
+    p = params or LayoutSettings()
     if len(char) != 1 or unsupported_chars(char):
         raise UsageError(f"unsupported character {char!r}: accepted are 0-9, A-Z and a-z")
     full = not char.islower() or char in p.ascenders
@@ -116,7 +116,7 @@ def letter_band(char: str, params: LayoutParams | None = None) -> tuple[float, f
     return bottom, top
 
 
-def place_letter(points, char: str, left: float, params: LayoutParams | None = None) -> np.ndarray:
+def place_letter(points, char: str, left: float, params: LayoutSettings | None = None) -> np.ndarray:
     """Scale one normalised letter to its band and put its box's left edge at ``left``.
 
     Parameters
@@ -127,7 +127,7 @@ def place_letter(points, char: str, left: float, params: LayoutParams | None = N
         Its character (decides the band, :func:`letter_band`).
     left : float
         x of the left edge of its bounding box, cm.
-    params : LayoutParams, optional
+    params : LayoutSettings, optional
 
     Returns
     -------
@@ -135,7 +135,7 @@ def place_letter(points, char: str, left: float, params: LayoutParams | None = N
         In centimetres: bounding box ``[left, left + w] x [bottom, bottom + h]`` with ``h`` the
         band height (or less, under the width guard).
     """
-    p = params or LayoutParams()
+    p = params or LayoutSettings()
     arr = np.asarray(points, dtype=np.float64)
     if arr.ndim != 2 or arr.shape[1] != 2 or arr.shape[0] < 1:
         raise UsageError(f"letter {char!r} must have shape (n, 2), got {arr.shape}")
@@ -155,7 +155,7 @@ def place_letter(points, char: str, left: float, params: LayoutParams | None = N
 
 
 def layout_letters(
-    letters: Sequence[np.ndarray], text: str, params: LayoutParams | None = None
+    letters: Sequence[np.ndarray], text: str, params: LayoutSettings | None = None
 ) -> list[np.ndarray]:
     """Size and place the letters of ``text`` left to right on the baseline ``y = 0``.
 
@@ -165,7 +165,7 @@ def layout_letters(
         One normalised trajectory (y up) per non-space character of ``text``, in order.
     text : str
         The characters (0-9, A-Z, a-z) and spaces between words.
-    params : LayoutParams, optional
+    params : LayoutSettings, optional
 
     Returns
     -------
@@ -177,7 +177,7 @@ def layout_letters(
     UsageError
         An unsupported character, or a number of letters different from the characters'.
     """
-    p = params or LayoutParams()
+    p = params or LayoutSettings()
     bad = [c for c in unsupported_chars(text) if c != " "]
     if bad:
         shown = ", ".join(repr(c) for c in bad)

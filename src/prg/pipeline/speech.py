@@ -7,9 +7,9 @@ Audio file or array (any sample rate and channel count)
 -> :func:`transcript_to_word`: letters and digits only, words separated by one space, case applied
 -> the text to write, whose characters are all in :mod:`prg.data.alphabet`.
 
-Spoken words carry no case, so the case of the written word is a choice (``SpeechParams.case``).
+Spoken words carry no case, so the case of the written word is a choice (``SpeechSettings.case``).
 
-Backends (``SpeechParams.backend``), each imported lazily (``pip install prg[speech]``):
+Backends (``SpeechSettings.backend``), each imported lazily (``pip install prg[speech]``):
 
 ``whisper``
     faster-whisper (CTranslate2). ``model``: a local CTranslate2 model folder, or a hub name that
@@ -95,7 +95,7 @@ _N_CANDIDATES = 5  # best lexicon words kept in Transcript.candidates
 
 
 @dataclass(frozen=True)
-class SpeechParams:
+class SpeechSettings:
     """How phi_S recognises speech.
 
     Parameters
@@ -386,7 +386,7 @@ def load_audio(
     return resample(mono, rate).astype(np.float32)
 
 
-def check_audio(audio: np.ndarray, params: SpeechParams, name: str = "audio") -> None:
+def check_audio(audio: np.ndarray, params: SpeechSettings, name: str = "audio") -> None:
     """Raise :class:`UsageError` if 16 kHz ``audio`` is empty, silent or too long."""
     if len(audio) == 0:
         raise UsageError(f"{name}: audio is empty (no samples)")
@@ -517,10 +517,10 @@ class Recogniser(Protocol):
     backend: str
     model: str
 
-    def transcribe(self, audio: np.ndarray, params: SpeechParams) -> str:
+    def transcribe(self, audio: np.ndarray, params: SpeechSettings) -> str:
         """Raw transcript of 16 kHz mono float32 ``audio``."""
 
-    def score(self, audio: np.ndarray, words: Sequence[str], params: SpeechParams) -> np.ndarray:
+    def score(self, audio: np.ndarray, words: Sequence[str], params: SpeechSettings) -> np.ndarray:
         """Log-probability of each of ``words`` being what ``audio`` says (NaN: not scored,
         shown to be below the best; -inf: the model cannot produce the word)."""
 
@@ -608,7 +608,7 @@ class WhisperRecogniser:
             language=self._language(language),
         )
 
-    def transcribe(self, audio: np.ndarray, params: SpeechParams) -> str:
+    def transcribe(self, audio: np.ndarray, params: SpeechSettings) -> str:
         hotwords = " ".join(params.lexicon) if params.lexicon else None
         # a short silence around an isolated word helps tiny.en: 16 -> 19 of 32 espeak-ng
         # words exactly right (en-us, 160 wpm) with WHISPER_PAD_S on both sides
@@ -625,7 +625,7 @@ class WhisperRecogniser:
         )
         return "".join(segment.text for segment in segments)
 
-    def score(self, audio: np.ndarray, words: Sequence[str], params: SpeechParams) -> np.ndarray:
+    def score(self, audio: np.ndarray, words: Sequence[str], params: SpeechSettings) -> np.ndarray:
         """``log sum_v P(v <eot> | audio)`` over the written variants ``v`` of each word.
 
         Exact scores are computed best-bound first: a variant's probability is at most its
@@ -742,11 +742,11 @@ class Wav2Vec2Recogniser:
             logits = self.network(inputs.input_values).logits
         return torch.log_softmax(logits.float(), dim=-1)[0]  # (frames, vocab)
 
-    def transcribe(self, audio: np.ndarray, params: SpeechParams) -> str:
+    def transcribe(self, audio: np.ndarray, params: SpeechSettings) -> str:
         ids = self._log_probs(audio).argmax(dim=-1)
         return self.processor.batch_decode(ids[None], skip_special_tokens=True)[0]
 
-    def score(self, audio: np.ndarray, words: Sequence[str], params: SpeechParams) -> np.ndarray:
+    def score(self, audio: np.ndarray, words: Sequence[str], params: SpeechSettings) -> np.ndarray:
         """CTC log-likelihood of each word's characters (-inf if the vocabulary lacks one)."""
         import torch
 
@@ -833,7 +833,7 @@ class PocketSphinxRecogniser:
             self._grammars[lexicon] = name
         return self._grammars[lexicon]
 
-    def transcribe(self, audio: np.ndarray, params: SpeechParams) -> str:
+    def transcribe(self, audio: np.ndarray, params: SpeechSettings) -> str:
         self.decoder.activate_search(self._search(params.lexicon))
         pcm = (np.clip(audio, -1.0, 1.0) * 32767.0).astype("<i2").tobytes()
         self.decoder.start_utt()
@@ -842,7 +842,7 @@ class PocketSphinxRecogniser:
         hyp = self.decoder.hyp()
         return hyp.hypstr if hyp is not None else ""
 
-    def score(self, audio: np.ndarray, words: Sequence[str], params: SpeechParams) -> np.ndarray:
+    def score(self, audio: np.ndarray, words: Sequence[str], params: SpeechSettings) -> np.ndarray:
         raise UsageError("rescore is for whisper and wav2vec2, not pocketsphinx")
 
 
@@ -873,7 +873,7 @@ def get_recogniser(backend: str, model: str | None = None) -> Recogniser:
 
 def recognise(
     audio: str | os.PathLike | np.ndarray,
-    params: SpeechParams | None = None,
+    params: SpeechSettings | None = None,
     sample_rate: int | None = None,
 ) -> Transcript:
     """Recognise one spoken word (or short phrase).
@@ -882,7 +882,7 @@ def recognise(
     ----------
     audio : path or ndarray, shape (n,) or (n, channels)
         See :func:`load_audio`.
-    params : SpeechParams, optional
+    params : SpeechSettings, optional
         Defaults: whisper, its offline default model, no lexicon.
     sample_rate : int, optional
         The array's sample rate in Hz (arrays only).
@@ -897,7 +897,7 @@ def recognise(
         Unreadable/missing file, empty, silent or too long audio, a transcript with no usable
         letters, an unknown backend, a missing model or optional dependency.
     """
-    params = SpeechParams() if params is None else params
+    params = SpeechSettings() if params is None else params
     name = str(audio) if isinstance(audio, str | os.PathLike) else "audio array"
     samples = load_audio(audio, sample_rate, params.max_seconds)
     check_audio(samples, params, name)
@@ -939,7 +939,7 @@ def recognise(
 
 def perceive_speech(
     audio: str | os.PathLike | np.ndarray,
-    params: SpeechParams | None = None,
+    params: SpeechSettings | None = None,
     sample_rate: int | None = None,
 ) -> tuple[str, Transcript]:
     """phi_S: audio to the text to write (and the transcript it came from).

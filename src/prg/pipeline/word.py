@@ -30,8 +30,8 @@ from xml.sax.saxutils import escape
 
 import numpy as np
 
-from prg.atomic import atomic_path
 from prg.errors import UsageError
+from prg.files import atomic_path
 from prg.pipeline.connect import ConnectionResult
 from prg.pipeline.layout import word_breaks
 
@@ -345,7 +345,7 @@ class WordTrajectory:
         show_points : bool
             Also mark every point (to inspect spacing).
         """
-        from prg.data.figures import pyplot
+        from prg.plotting import pyplot
 
         plt = pyplot()
         margin = 0.3

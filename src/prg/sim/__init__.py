@@ -34,7 +34,7 @@ from prg.sim.geometry import (
 from prg.sim.ink import ink_png, ink_svg
 from prg.sim.plan import MotionPlan, MotionSettings, plan_motion
 from prg.sim.record import record_simulation
-from prg.sim.robots import RobotConfig
+from prg.sim.robots import RobotSettings
 from prg.sim.scene import Camera, IKSettings, IKSolver, Scene, UnreachableError
 from prg.sim.words import font_word
 from prg.sim.writing import (
@@ -56,7 +56,7 @@ __all__ = [
     "MotionSettings",
     "Paper",
     "ReachMap",
-    "RobotConfig",
+    "RobotSettings",
     "Scene",
     "SimResult",
     "SimSettings",

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from prg.atomic import atomic_path
+from prg.files import atomic_path
 from prg.sim.geometry import Paper
 
 __all__ = ["draw_strokes", "ink_png", "ink_svg", "page_texture"]

@@ -56,7 +56,7 @@ import rerun.blueprint as rrb
 
 from prg.recording import Y_SIGN, framing, recording_stream
 from prg.sim.geometry import runs
-from prg.sim.robots import RobotConfig
+from prg.sim.robots import RobotSettings
 from prg.sim.scene import TABLE_TOP_Z
 from prg.sim.writing import SimResult
 
@@ -75,7 +75,7 @@ PEN = (25, 50, 180)
 LIFT_M = 0.0002  # draw paths this far over the paper so they are not hidden in it
 
 
-def recording_urdf(robot: RobotConfig, folder: str | os.PathLike) -> Path:
+def recording_urdf(robot: RobotSettings, folder: str | os.PathLike) -> Path:
     """A copy of the robot's URDF for Rerun's importer: visual geometry only, mesh paths
     absolute (``package://`` and relative paths resolved against the URDF's folder).
 
@@ -110,7 +110,7 @@ def _segments(points: np.ndarray, keep: np.ndarray) -> tuple[np.ndarray, np.ndar
     return idx, np.stack([points[idx - 1], points[idx]], axis=1)
 
 
-def _pen_geometry(robot: RobotConfig) -> rr.Cylinders3D:
+def _pen_geometry(robot: RobotSettings) -> rr.Cylinders3D:
     offset = np.asarray(robot.pen_offset, dtype=np.float64)
     axis = offset / np.linalg.norm(offset)
     centre = offset - axis * robot.pen_length / 2

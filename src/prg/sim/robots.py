@@ -1,6 +1,6 @@
 """Robot descriptions as data: which URDF, which joints, where the pen is, where the base stands.
 
-A :class:`RobotConfig` is built from a ``conf/robot/<name>.yaml`` node (:meth:`RobotConfig.from_dict`)
+A :class:`RobotSettings` is built from a ``conf/robot/<name>.yaml`` node (:meth:`RobotSettings.from_dict`)
 and holds nothing but plain values; :class:`prg.sim.scene.Scene` loads it into PyBullet and
 resolves the joint and link names to indices there (:class:`LoadedRobot`).
 """
@@ -18,7 +18,7 @@ import numpy as np
 
 from prg.errors import UsageError
 
-__all__ = ["LoadedRobot", "RobotConfig", "pybullet_data_path", "resolve_urdf"]
+__all__ = ["LoadedRobot", "RobotSettings", "pybullet_data_path", "resolve_urdf"]
 
 
 def pybullet_data_path() -> Path:
@@ -54,7 +54,7 @@ def resolve_urdf(path: str | os.PathLike) -> Path:
 
 
 @dataclass(frozen=True)
-class RobotConfig:
+class RobotSettings:
     """A 7-DOF arm holding a pen.
 
     Attributes
@@ -115,7 +115,7 @@ class RobotConfig:
                 raise UsageError(f"robot {self.name}: {name} must be a positive number (m)")
 
     @classmethod
-    def from_dict(cls, node: Mapping[str, Any]) -> RobotConfig:
+    def from_dict(cls, node: Mapping[str, Any]) -> RobotSettings:
         """From a ``conf/robot/*.yaml`` node (a mapping); names the bad key on error."""
         data = dict(node)
         try:
@@ -151,11 +151,11 @@ class RobotConfig:
 
 @dataclass(frozen=True)
 class LoadedRobot:
-    """A :class:`RobotConfig` loaded into one PyBullet client: body and indices.
+    """A :class:`RobotSettings` loaded into one PyBullet client: body and indices.
 
     Attributes
     ----------
-    config : RobotConfig
+    config : RobotSettings
     body : int
         PyBullet body unique id.
     flange : int
@@ -172,7 +172,7 @@ class LoadedRobot:
         Joint index to value for ``config.held_joints``.
     """
 
-    config: RobotConfig
+    config: RobotSettings
     body: int
     flange: int
     arm: tuple[int, ...]

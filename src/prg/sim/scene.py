@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from prg.errors import PRGError, UsageError
 from prg.sim.geometry import Paper
-from prg.sim.robots import LoadedRobot, RobotConfig, pybullet_data_path
+from prg.sim.robots import LoadedRobot, RobotSettings, pybullet_data_path
 
 log = logging.getLogger(__name__)
 
@@ -137,7 +137,7 @@ def _rotate(quaternion: ArrayLike, vector: ArrayLike) -> NDArray[np.float64]:
     return v + 2.0 * np.cross(u, np.cross(u, v) + w * v)
 
 
-def _load_robot(p: ModuleType, cid: int, config: RobotConfig) -> LoadedRobot:
+def _load_robot(p: ModuleType, cid: int, config: RobotSettings) -> LoadedRobot:
     try:
         body = p.loadURDF(
             str(config.urdf_path),
@@ -200,7 +200,7 @@ class IKSolver:
 
     Parameters
     ----------
-    config : RobotConfig
+    config : RobotSettings
     settings : IKSettings
 
     Attributes
@@ -210,7 +210,7 @@ class IKSolver:
         turned about the pen as in the rest pose.
     """
 
-    def __init__(self, config: RobotConfig, settings: IKSettings | None = None) -> None:
+    def __init__(self, config: RobotSettings, settings: IKSettings | None = None) -> None:
         self.p = pybullet()
         self.settings = settings or IKSettings()
         self.cid = self.p.connect(self.p.DIRECT)
@@ -439,7 +439,7 @@ class Scene:
 
     Parameters
     ----------
-    robot : RobotConfig
+    robot : RobotSettings
     paper : Paper
     gui : bool
         Connect with the GUI (needs a display) instead of DIRECT.
@@ -454,7 +454,7 @@ class Scene:
     """
 
     def __init__(
-        self, robot: RobotConfig, paper: Paper, gui: bool = False, time_step: float = 1 / 240
+        self, robot: RobotSettings, paper: Paper, gui: bool = False, time_step: float = 1 / 240
     ) -> None:
         self.check_gui(gui)
         self.p = p = pybullet()

@@ -5,7 +5,7 @@
 joined into one stroke and normalised the way the training data are
 (:func:`prg.data.synthetic.join_strokes`, :func:`prg.data.preprocess.preprocess_stroke`), then
 laid out, connected (Algorithm 1) and fitted with one DMP by
-:func:`prg.pipeline.generate.compose_word` — the same final processing map ``prg-write`` uses
+:func:`prg.pipeline.compose.compose_word` — the same final processing map ``prg-write`` uses
 on a model's decoded letters.
 """
 
@@ -21,13 +21,13 @@ from prg.errors import UsageError
 from prg.pipeline.word import WordTrajectory
 
 if TYPE_CHECKING:
-    from prg.pipeline.generate import GenerateParams
+    from prg.pipeline.compose import GenerateSettings
 
 __all__ = ["font_word"]
 
 
 def font_word(
-    text: str, font: str = "futural", params: GenerateParams | None = None
+    text: str, font: str = "futural", params: GenerateSettings | None = None
 ) -> WordTrajectory:
     """A word (or words separated by spaces) written in a Hershey font, with its DMP.
 
@@ -37,7 +37,7 @@ def font_word(
         Letters 0-9, A-Z, a-z, and spaces.
     font : str
         A Hershey font name (``futural``, ``rowmans``, ``scripts``, ``cursive`` ...).
-    params : GenerateParams, optional
+    params : GenerateSettings, optional
         Layout, connection and DMP settings (``prg-write``'s defaults).
 
     Returns
@@ -47,7 +47,7 @@ def font_word(
     """
     from HersheyFonts import HersheyFonts
 
-    from prg.pipeline.generate import clean_text, compose_word  # imports torch: only when used
+    from prg.pipeline.compose import clean_text, compose_word
 
     text = clean_text(text)
     typeface = HersheyFonts()

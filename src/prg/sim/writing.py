@@ -33,7 +33,7 @@ from prg.sim.geometry import (
     tracking_error,
 )
 from prg.sim.plan import PHASES, MotionPlan, MotionSettings, plan_motion
-from prg.sim.robots import RobotConfig
+from prg.sim.robots import RobotSettings
 from prg.sim.scene import Camera, IKSettings, IKSolver, Scene
 
 log = logging.getLogger(__name__)
@@ -190,7 +190,7 @@ def word_samples(
         _check_duration(word, tau, tempo)
         samples = rollout(dmp, tau=tau, dt=dt)
     else:
-        from prg.pipeline.generate import rest_to_rest_samples
+        from prg.pipeline.timing import rest_to_rest_samples
 
         _check_duration(word, word.path_length / word.speed_cm_s * tempo, tempo)
         samples, tau = rest_to_rest_samples(word.points, word.speed_cm_s, 0.3, 1 / (dt * tempo))
@@ -347,7 +347,7 @@ class SimResult:
     Attributes
     ----------
     text : str
-    robot : RobotConfig
+    robot : RobotSettings
     settings : SimSettings
     plan : MotionPlan
         The commanded pen-tip waypoints (paper frame, cm).
@@ -385,7 +385,7 @@ class SimResult:
     """
 
     text: str
-    robot: RobotConfig
+    robot: RobotSettings
     settings: SimSettings
     plan: MotionPlan
     q_plan: NDArray[np.float64]
@@ -473,7 +473,7 @@ def _describe(plan: MotionPlan):
 
 def simulate_word(
     word: WordTrajectory,
-    robot: RobotConfig,
+    robot: RobotSettings,
     settings: SimSettings | None = None,
     *,
     gui: bool = False,
@@ -486,7 +486,7 @@ def simulate_word(
     ----------
     word : WordTrajectory
         From ``prg-write`` (``word.json``); its DMP gives the pen-down motion and its timing.
-    robot : RobotConfig
+    robot : RobotSettings
     settings : SimSettings, optional
     gui : bool
         PyBullet GUI instead of DIRECT (needs a display).

@@ -6,8 +6,8 @@ import numpy as np
 import torch
 
 from prg.data.alphabet import ALPHABET, NUM_CLASSES
-from prg.data.figures import pyplot
 from prg.models.base import MultimodalVAE
+from prg.plotting import pyplot
 
 
 def _grid(items, titles: list[str], cols: int, title: str, cell: tuple[float, float], draw):

@@ -15,7 +15,7 @@ import logging
 from omegaconf import DictConfig
 
 from prg.checks import check_values
-from prg.cli import check_output, hydra_command
+from prg.commands.cli import check_output, hydra_command
 from prg.data.build import BuildResult, build_dataset
 
 log = logging.getLogger(__name__)

@@ -34,10 +34,10 @@ from typing import Any
 import numpy as np
 from omegaconf import DictConfig, OmegaConf, open_dict
 
-from prg.atomic import staged_outputs, write_json
 from prg.checks import check_values
-from prg.cli import check_output, hydra_command
+from prg.commands.cli import check_output, hydra_command
 from prg.errors import UsageError
+from prg.files import staged_outputs, write_json
 from prg.pipeline.word import WordTrajectory
 
 log = logging.getLogger(__name__)
@@ -47,7 +47,7 @@ OUTPUTS = ("ink.png", "ink.svg", "page.png", "joints.csv", "joints.npz", "metric
 
 
 def settings_from_config(cfg: DictConfig):
-    """The robot (:class:`~prg.sim.robots.RobotConfig`) and the simulation settings
+    """The robot (:class:`~prg.sim.robots.RobotSettings`) and the simulation settings
     (:class:`~prg.sim.writing.SimSettings`) of the composed config; one line on a bad value."""
     from prg.sim import (
         Camera,
@@ -55,7 +55,7 @@ def settings_from_config(cfg: DictConfig):
         IKSettings,
         MotionSettings,
         Paper,
-        RobotConfig,
+        RobotSettings,
         SimSettings,
     )
 
@@ -72,7 +72,7 @@ def settings_from_config(cfg: DictConfig):
     paper = node("paper")
     word_centre = paper.pop("word_centre_cm")
     try:
-        robot = RobotConfig.from_dict(node("robot"))
+        robot = RobotSettings.from_dict(node("robot"))
         settings = SimSettings(
             paper=Paper(
                 size_cm=tuple(paper["size_cm"]),
@@ -104,7 +104,7 @@ def _number(value: Any, key: str) -> float:
 
 def _write_word(cfg: DictConfig, out_dir: Path) -> WordTrajectory:
     """Run ``prg-write``'s task with the composed write settings into ``out_dir``."""
-    from prg.write import write
+    from prg.commands.write import write
 
     write_cfg = cfg.copy()
     with open_dict(write_cfg):

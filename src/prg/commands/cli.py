@@ -13,7 +13,7 @@ exception is a bug and keeps its traceback.
 
 Signals: SIGINT (Ctrl-C), SIGTERM (``kill``, SLURM, container managers) and SIGHUP end every
 command the same way (:func:`handle_signals`): the work stops, child processes are terminated,
-every output is left as it was before the command (outputs are staged, :mod:`prg.atomic`), and
+every output is left as it was before the command (outputs are staged, :mod:`prg.files`), and
 one line ``<command>: error: stopped by SIGTERM ...`` is printed with exit code 128 + the signal
 number (130 for SIGINT, 143 for SIGTERM), the shell's convention. A second signal while the
 first is being handled ends the process at once.

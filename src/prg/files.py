@@ -1,4 +1,5 @@
-"""Writes that are all or nothing: a file or a folder appears complete, or not at all.
+"""Files: writes that are all or nothing (a file or a folder appears complete, or not at all),
+JSON text and file hashes.
 
 Every output of the project goes through here. A file is written under a hidden temporary name
 beside its final name and renamed over it (``os.replace`` is atomic within a file system); a
@@ -17,6 +18,7 @@ could not be written.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import re
@@ -218,3 +220,15 @@ __all__ = [
     "write_json",
     "write_text",
 ]
+
+
+_HASH_CHUNK = 1 << 16
+
+
+def sha256_file(path: str | os.PathLike) -> str:
+    """Hex SHA-256 of a file's bytes, read in chunks (a checkpoint or a download may be large)."""
+    digest = hashlib.sha256()
+    with Path(path).open("rb") as handle:
+        while chunk := handle.read(_HASH_CHUNK):
+            digest.update(chunk)
+    return digest.hexdigest()

@@ -37,9 +37,8 @@ import numpy as np
 import torch
 from omegaconf import DictConfig, OmegaConf
 
-from prg.atomic import staged_outputs, write_json
 from prg.checks import check_values
-from prg.cli import check_output, hydra_command
+from prg.commands.cli import check_output, hydra_command
 from prg.data.alphabet import ALPHABET, NUM_CLASSES
 from prg.data.build import git_commit
 from prg.data.datamodule import check_model_shapes
@@ -64,6 +63,7 @@ from prg.evaluation.reports import (
     to_csv,
 )
 from prg.evaluation.smoothness import median_roughness
+from prg.files import staged_outputs, write_json
 from prg.models.base import LETTER, MultimodalVAE
 from prg.models.checkpoint import load_model
 from prg.models.likelihoods import Likelihoods
@@ -427,8 +427,8 @@ def metrics_of(result: Evaluation) -> dict[str, Any]:
 
 
 def _figures(models, per_class, data: dict[str, torch.Tensor], folder: Path) -> None:
-    from prg.data.figures import pyplot
-    from prg.figures import image_grid, trajectory_grid
+    from prg.plotting import pyplot
+    from prg.training.generation_figures import image_grid, trajectory_grid
 
     plt = pyplot()
     first = [

@@ -33,44 +33,37 @@ import numpy as np
 import torch
 from omegaconf import DictConfig, OmegaConf
 
-from prg.atomic import staged_outputs
 from prg.checks import check_text_length, check_values, literal_text, literal_words
-from prg.cli import check_output, hydra_command
+from prg.commands.cli import check_output, hydra_command
 from prg.errors import UsageError
+from prg.files import staged_outputs
 from prg.models.checkpoint import load_model
-from prg.pipeline.connect import ConnectionParams
-from prg.pipeline.generate import (
-    GenerateParams,
-    check_inputs,
-    clean_text,
-    compose_word,
-    decode_letters,
-    infer_text,
-    label_inputs,
-)
-from prg.pipeline.layout import LayoutParams
+from prg.pipeline.connect import ConnectionSettings
+from prg.pipeline.decode import check_inputs, decode_letters, infer_text, label_inputs
+from prg.pipeline.compose import GenerateSettings, clean_text, compose_word
+from prg.pipeline.layout import LayoutSettings
 from prg.pipeline.perceive import (
     load_image,
     perceive_letter_images,
     perceive_trajectories,
     segment_word_image,
 )
-from prg.pipeline.speech import SAMPLE_RATE, SpeechParams
+from prg.pipeline.speech import SAMPLE_RATE, SpeechSettings
 from prg.pipeline.word import WordTrajectory
 from prg.recording import record_write
 
 log = logging.getLogger(__name__)
 
 
-def params_from_config(cfg: DictConfig) -> GenerateParams:
-    """The generation, layout and connection settings as :class:`GenerateParams`."""
+def params_from_config(cfg: DictConfig) -> GenerateSettings:
+    """The generation, layout and connection settings as :class:`GenerateSettings`."""
     connection = OmegaConf.to_container(cfg.connection, resolve=True)
     connection["alpha_max"] = math.radians(connection.pop("alpha_max_deg"))
     try:
-        return GenerateParams(
+        return GenerateSettings(
             **OmegaConf.to_container(cfg.generate, resolve=True),
-            layout=LayoutParams(**OmegaConf.to_container(cfg.layout, resolve=True)),
-            connection=ConnectionParams(**connection),
+            layout=LayoutSettings(**OmegaConf.to_container(cfg.layout, resolve=True)),
+            connection=ConnectionSettings(**connection),
         )
     except (TypeError, ValueError) as err:
         raise UsageError(f"write settings: {err}") from None
@@ -143,8 +136,8 @@ def read_lexicon(path: Path) -> list[str]:
     return [w for w in text.splitlines() if w.strip()]
 
 
-def speech_params_from_config(cfg: DictConfig) -> SpeechParams:
-    """The ``speech`` settings as :class:`SpeechParams`; ``lexicon`` may name a text file of
+def speech_params_from_config(cfg: DictConfig) -> SpeechSettings:
+    """The ``speech`` settings as :class:`SpeechSettings`; ``lexicon`` may name a text file of
     words (one per line)."""
     settings = OmegaConf.to_container(cfg.speech, resolve=True)
     lexicon = settings.get("lexicon")
@@ -153,12 +146,12 @@ def speech_params_from_config(cfg: DictConfig) -> SpeechParams:
     elif lexicon is not None:
         settings["lexicon"] = literal_words(lexicon, "speech.lexicon")
     try:
-        return SpeechParams(**settings)
+        return SpeechSettings(**settings)
     except TypeError as err:
         raise UsageError(f"speech settings: {err}") from None
 
 
-def speech_input(audio: str | os.PathLike, settings: SpeechParams) -> dict[str, Any]:
+def speech_input(audio: str | os.PathLike, settings: SpeechSettings) -> dict[str, Any]:
     """phi_S on a sound file: its 16 kHz samples (for the recording) and the transcript."""
     from prg.pipeline.speech import load_audio, perceive_speech
 

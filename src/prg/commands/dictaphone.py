@@ -34,28 +34,22 @@ import numpy as np
 from omegaconf import DictConfig, OmegaConf
 from scipy.signal import spectrogram
 
-from prg.atomic import atomic_path, staged_outputs, write_json
 from prg.checks import check_values, literal_words
-from prg.cli import check_output, hydra_command
+from prg.commands.cli import check_output, hydra_command
+from prg.commands.write import image_inputs, params_from_config, save_outputs, speech_input
+from prg.commands.write import speech_params_from_config as speech_settings
 from prg.data.alphabet import char_to_label
 from prg.data.datamodule import check_model_shapes
-from prg.data.figures import pyplot
 from prg.data.store import load_split
 from prg.errors import UsageError
+from prg.files import atomic_path, staged_outputs, write_json
 from prg.models.checkpoint import load_model
-from prg.pipeline.generate import (
-    check_inputs,
-    clean_text,
-    compose_word,
-    decode_letters,
-    infer_text,
-    label_inputs,
-    rest_to_rest_samples,
-)
+from prg.pipeline.decode import check_inputs, decode_letters, infer_text, label_inputs
+from prg.pipeline.compose import clean_text, compose_word
+from prg.pipeline.timing import rest_to_rest_samples
 from prg.pipeline.speech import SAMPLE_RATE
 from prg.pipeline.word import WordTrajectory
-from prg.write import image_inputs, params_from_config, save_outputs, speech_input
-from prg.write import speech_params_from_config as speech_settings
+from prg.plotting import pyplot
 
 log = logging.getLogger(__name__)
 

@@ -1,4 +1,4 @@
-"""``python -m prg.paper_scale`` (``make paper``, ``make converged``): train and evaluate the four
+"""``python -m prg.commands.paper_scale`` (``make paper``, ``make converged``): train and evaluate the four
 families under one profile, in one command.
 
 ``--profile paper`` (default, ``make paper``) trains at the paper's settings (``prg-train
@@ -52,12 +52,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from prg.atomic import write_json
-from prg.cli import handle_signals
+from prg.commands.cli import handle_signals
 from prg.errors import PRGError, UsageError
+from prg.files import write_json
 from prg.signals import Interrupted, deferred
 
-COMMAND = "prg.paper_scale"
+COMMAND = "prg.commands.paper_scale"
 FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse")
 PROFILES = ("paper", "converged")
 DATA_NAME = "synthetic"
@@ -502,7 +502,7 @@ def eval_overrides(args: argparse.Namespace, root: Path, accelerator: str) -> li
 
 
 def _evaluate_has(key: str) -> bool:
-    from prg.cli import compose_config
+    from prg.commands.cli import compose_config
 
     return key in compose_config("evaluate", [])
 
@@ -514,7 +514,7 @@ def _split(overrides: list[str]) -> tuple[list[str], list[str]]:
 
 def check_overrides(name: str, config: str, overrides: list[str]) -> Any:
     """Compose ``conf/<config>.yaml`` with ``overrides`` (not ``hydra.*``): one line if bad."""
-    from prg.cli import compose_config
+    from prg.commands.cli import compose_config
 
     plain, _ = _split(overrides)
     try:
@@ -537,7 +537,7 @@ def _module_argv(module: str, overrides: list[str]) -> list[str]:
 
 def run(args: argparse.Namespace, console: Console) -> dict[str, Any]:
     """Prepare (if needed), train, evaluate; returns the timings written to the JSON."""
-    from prg.cli import check_output
+    from prg.commands.cli import check_output
 
     root = check_output(Path(args.root), "--root")
     accelerator, device_name = resolve_device(args.device)
@@ -633,7 +633,7 @@ def _stages(
         overrides += args.prepare_set
         job = Job(
             "prepare",
-            _module_argv("prg.prepare", overrides),
+            _module_argv("prg.commands.prepare", overrides),
             root / "logs/prepare.log",
             _child_env(None),
         )
@@ -648,7 +648,7 @@ def _stages(
             Job(
                 f,
                 _module_argv(
-                    "prg.train",
+                    "prg.commands.train",
                     train_overrides(args, root, f, accelerator) + _common(args, root, f"train-{f}"),
                 ),
                 root / f"logs/train-{f}.log",
@@ -666,7 +666,7 @@ def _stages(
         jobs.append(
             Job(
                 "classifiers",
-                _module_argv("prg.evaluate", classifier),
+                _module_argv("prg.commands.evaluate", classifier),
                 root / "logs/classifiers.log",
                 _child_env(threads),
             )
@@ -690,7 +690,7 @@ def _stages(
     ]
     job = Job(
         "evaluate",
-        _module_argv("prg.evaluate", evaluate),
+        _module_argv("prg.commands.evaluate", evaluate),
         root / "logs/evaluate.log",
         _child_env(None),
     )

@@ -10,7 +10,7 @@ Examples
 Resuming after a crash or a kill: ``ckpt_path=last`` resolves to ``${checkpoint_dir}/last.ckpt``
 (a one-line usage error, exit 2, when there is none). ``last.ckpt`` is refreshed every
 ``callbacks.last.every_n_train_steps`` steps inside an epoch, at the end of each epoch and at the
-end of training (:class:`prg.callbacks.LastCheckpoint`), so a kill loses at most that many steps.
+end of training (:class:`prg.training.callbacks.LastCheckpoint`), so a kill loses at most that many steps.
 The resumed run finishes the interrupted epoch's remaining batches, continues the same MLflow
 run (its id travels in the checkpoint) and marks it FINISHED at the end. Metrics are logged once
 per epoch, at the epoch's last step, so the run's history has each epoch once (see
@@ -31,15 +31,15 @@ import lightning as L
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
-from prg.atomic import staged_outputs, write_json
 from prg.checks import check_values
-from prg.cli import check_output, hydra_command
+from prg.commands.cli import check_output, hydra_command
 from prg.data.build import git_commit
 from prg.data.datamodule import PRGDataModule, read_manifest
 from prg.errors import UsageError
+from prg.files import sha256_file, staged_outputs, write_json
 from prg.models.checkpoint import read_checkpoint
 from prg.models.module import PRGModule
-from prg.tracking import PARENT_ENV, artifact_location, file_sha256, flatten, tracking_uri
+from prg.tracking import PARENT_ENV, artifact_location, flatten, tracking_uri
 
 log = logging.getLogger(__name__)
 
@@ -112,7 +112,7 @@ def _manifest(cfg: DictConfig) -> tuple[dict[str, Any], str]:
         raise UsageError(
             f"no prepared dataset at {path.parent}: run `prg-prepare data={cfg.data.name}` first"
         )
-    return read_manifest(path.parent), file_sha256(path)
+    return read_manifest(path.parent), sha256_file(path)
 
 
 def _resolve_ckpt_path(cfg: DictConfig) -> str | None:
@@ -192,7 +192,7 @@ def _train(cfg: DictConfig) -> TrainResult:
         tags=tags,
     )
     callbacks = [_build(c, f"callbacks.{name}") for name, c in cfg.callbacks.items() if c]
-    from prg.callbacks import LastCheckpoint, MLflowRun, best_checkpoint
+    from prg.training.callbacks import LastCheckpoint, MLflowRun, best_checkpoint
 
     callbacks.append(
         MLflowRun(

@@ -13,7 +13,8 @@ import lightning as L
 from lightning.pytorch.callbacks import Checkpoint, EarlyStopping, ModelCheckpoint
 from lightning.pytorch.loggers import MLFlowLogger
 
-from prg.atomic import atomic_path
+from prg.files import atomic_path
+from prg.plotting import pyplot
 
 log = logging.getLogger(__name__)
 
@@ -186,7 +187,7 @@ class GenerationFigures(L.Callback):
         logger = _mlflow(trainer)
         if logger is None or trainer.global_rank != 0 or trainer.datamodule is None:
             return
-        from prg.figures import generation_figures
+        from prg.training.generation_figures import generation_figures
 
         loader = trainer.datamodule.val_dataloader()
         batch = next(iter(loader))
@@ -197,7 +198,7 @@ class GenerationFigures(L.Callback):
             figures = generation_figures(pl_module.model, batch)
         finally:
             pl_module.train(was_training)
-        import matplotlib.pyplot as plt
+        plt = pyplot()
 
         with tempfile.TemporaryDirectory() as tmp:
             for name, fig in figures.items():

@@ -1,0 +1,1 @@
+"""The command layer: each module wires a Hydra config to one library call and its outputs."""

@@ -1,0 +1,124 @@
+"""Generate: decoded letters -> laid-out word -> connection strokes -> one DMP (NumPy only).
+
+:func:`compose_word` applies the final processing map (``prg.pipeline.layout``: sizes and
+baseline; ``prg.pipeline.connect``: connection strokes) to the decoded letters, times the path
+from rest to rest (``prg.pipeline.timing``) and fits one DMP to the whole word
+(``prg.pipeline.dmp``). :func:`clean_text` makes a user's text ready to write.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from prg.checks import check_text_length
+from prg.data.alphabet import text_to_labels, unsupported_chars
+from prg.errors import UsageError
+from prg.pipeline.connect import ConnectionSettings, connect_sequence
+from prg.pipeline.dmp import basis_count, fit_dmp, rollout
+from prg.pipeline.layout import LayoutSettings, layout_letters, word_breaks
+from prg.pipeline.timing import rest_to_rest_samples
+from prg.pipeline.word import DEFAULT_SPEED_CM_S, WordTrajectory, assemble_word
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class GenerateSettings:
+    """How a word is generated and timed (all config values, ``conf/write.yaml``).
+
+    temperature : 0 decodes each letter's posterior mean; > 0 draws latents with their std
+        scaled by it (variety), reproducibly for ``seed``.
+    impute_steps : rounds of imputing the modalities a letter was not given before decoding
+        (:meth:`prg.models.muse.MUSE.encode_imputed`; families without a joint posterior ignore
+        it). 0 is the paper's decoding. The demo MUSE's letters from labels read right (folded
+        coherence, whole test split) 0.68 with 0 rounds, 0.89 with 10, 0.94 with 20.
+    method : ``"alg1"`` (the paper's connection algorithm) or ``"straight"``.
+    speed_cm_s : mean pen speed over the word; ``ramp_s`` : start/stop ramp duration.
+    samples_per_s : DMP demonstration samples per second of writing.
+    basis_per_100_samples : DMP basis functions per 100 demonstration samples. Words from the
+        decoder carry more detail than smooth test curves (corners where letters join): with
+        70 per 100 samples at 100 samples/s, 30 random words of 6-12 letters from the demo MUSE
+        were reproduced with RMSE median 0.024 mm, 90th percentile 0.061 mm, worst 0.107 mm
+        (50: 0.058 / 0.123 / 0.261; 20 left up to 0.3 mm; ``benchmarks/bench_write.py``).
+    """
+
+    temperature: float = 0.0
+    seed: int = 0
+    impute_steps: int = 20
+    method: str = "alg1"
+    speed_cm_s: float = DEFAULT_SPEED_CM_S
+    ramp_s: float = 0.3
+    samples_per_s: float = 100.0
+    basis_per_100_samples: int = 70
+    layout: LayoutSettings = field(default_factory=LayoutSettings)
+    connection: ConnectionSettings = field(default_factory=ConnectionSettings)
+
+
+def compose_word(
+    letters: np.ndarray, text: str, params: GenerateSettings | None = None
+) -> tuple[WordTrajectory, np.ndarray]:
+    """The final processing map and the DMP on decoded letters (the second half of
+    :func:`write_word`).
+
+    Parameters
+    ----------
+    letters : ndarray, shape (N, k, 2)
+        Normalised letter trajectories (y up), one per non-space character of ``text``.
+    text : str
+    params : GenerateSettings, optional
+
+    Returns
+    -------
+    word, rollout : as :func:`write_word`.
+    """
+    params = params or GenerateSettings()
+    placed = layout_letters(list(letters), text, params.layout)
+    connections = connect_sequence(
+        placed, params.connection, method=params.method, breaks=word_breaks(text)
+    )
+    word = assemble_word(placed, connections, text, speed_cm_s=params.speed_cm_s)
+    samples, duration = rest_to_rest_samples(
+        word.points, params.speed_cm_s, params.ramp_s, params.samples_per_s
+    )
+    n_basis = basis_count(len(samples), per_100_points=params.basis_per_100_samples)
+    dmp = fit_dmp(samples, tau=duration, n_basis=n_basis)
+    word.dmp = dmp.to_dict()
+    word.duration_s = duration
+    return word, rollout(dmp)
+
+
+def clean_text(text: str, on_unknown: str = "error", key: str = "text") -> str:
+    """``text`` ready to write: words separated by single spaces, unsupported characters handled.
+
+    Parameters
+    ----------
+    text : str
+    on_unknown : {"error", "skip"}
+        ``"error"``: one error listing every character outside 0-9, A-Z, a-z (spaces aside);
+        ``"skip"``: drop them (logged) and write the rest.
+    key : str
+        The option the text came from, for the message when it is longer than
+        :data:`prg.checks.MAX_TEXT_LETTERS` letters.
+
+    Raises
+    ------
+    UsageError
+        For an unsupported character with ``on_unknown="error"``, an unknown ``on_unknown``, or
+        nothing left to write.
+    """
+    if on_unknown not in ("error", "skip"):
+        raise UsageError(f"on_unknown {on_unknown!r}: choose error or skip")
+    words = text.split()
+    unknown = unsupported_chars("".join(words))
+    if unknown and on_unknown == "error":
+        text_to_labels("".join(words))  # raises, listing them
+    if unknown:
+        log.warning("skipping unsupported characters %s", ", ".join(map(repr, unknown)))
+        words = ["".join(c for c in w if c not in unknown) for w in words]
+    cleaned = " ".join(w for w in words if w)
+    if not cleaned:
+        raise UsageError(f"text {text!r} has no letters to write: accepted are 0-9, A-Z and a-z")
+    return check_text_length(cleaned, key)

@@ -1,0 +1,1 @@
+"""Training support: Lightning callbacks and the generation figures they log."""
