@@ -49,15 +49,11 @@ def make_words(words: list[str]) -> tuple[dict[str, WordTrajectory], str]:
     ckpt = ROOT / "models" / "muse" / "model.ckpt"
     if not ckpt.exists():
         return {w: font_word(w) for w in words}, "Hershey font (futural), no models/muse"
-    from prg.commands.write import params_from_config
-    from prg.models.checkpoint import load_model
-    from prg.pipeline.decode import label_inputs
-    from prg.pipeline.compose import GenerateSettings
-    from prg.pipeline.generate import write_word  # TODO
+    from prg.commands.settings import generate_settings
+    from prg.writer import Writer
 
-    model, _ = load_model(ckpt)
-    params: GenerateSettings = params_from_config(compose_config("write", []))
-    out = {w: write_word(model, w, label_inputs(w), params)[0] for w in words}
+    writer = Writer.from_checkpoint(ckpt, settings=generate_settings(compose_config("write", [])))
+    out = {w: writer.write(text=w).word for w in words}
     return out, str(ckpt.relative_to(ROOT))
 
 

@@ -1,7 +1,7 @@
 """Benchmark writing a word: label input -> letters -> layout -> connections -> one DMP rollout.
 
 For words of 1-12 letters (``--reps`` random lowercase words per length, seeded), the whole
-``prg.pipeline.generate.write_word`` path is timed (decode every letter, final processing map,
+``prg.writer.Writer.generate`` path is timed (decode every letter, final processing map,
 Algorithm 1 connection strokes, rest-to-rest timing, DMP fit and rollout), side by side in the
 same run with two references:
 
@@ -47,10 +47,10 @@ from omegaconf import OmegaConf
 from prg.commands.cli import compose_config
 from prg.errors import UsageError
 from prg.models.checkpoint import load_model
-from prg.pipeline.decode import label_inputs, usable_inputs
 from prg.pipeline.compose import GenerateSettings
+from prg.pipeline.decode import label_inputs, usable_inputs
 from prg.pipeline.timing import rest_to_rest_samples
-from prg.pipeline.generate import write_word  # TODO
+from prg.writer import Perception, Writer
 
 RESULTS = Path(__file__).parent / "results"
 ROOT = Path(__file__).parent.parent
@@ -89,11 +89,12 @@ def time_word(model, text: str, params: GenerateSettings) -> dict:
         model.generate(usable_inputs(model, inputs), "traj", n=1)
     decode = time.perf_counter() - start
     start = time.perf_counter()
-    word, path = write_word(model, text, inputs, params)
+    result = Writer(model, params).generate(Perception(text, inputs))
+    word, path = result.word, result.rollout
     total = time.perf_counter() - start
     straight = GenerateSettings(**{**params.__dict__, "method": "straight"})
     start = time.perf_counter()
-    write_word(model, text, inputs, straight)
+    Writer(model, straight).generate(Perception(text, inputs))
     total_straight = time.perf_counter() - start
     samples, _ = rest_to_rest_samples(
         word.points, params.speed_cm_s, params.ramp_s, params.samples_per_s
@@ -135,7 +136,7 @@ def speech_rows(model, family: str, params: GenerateSettings, reps: int) -> list
                         heard = None
                     middle = time.perf_counter()
                     if heard is not None:
-                        write_word(model, heard, label_inputs(heard), params)
+                        Writer(model, params).generate(Perception(heard, label_inputs(heard)))
                     times.append(time.perf_counter() - start)
                     recognise_times.append(middle - start)
                 rows.append(

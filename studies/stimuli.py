@@ -30,7 +30,6 @@ import hashlib
 import json
 import math
 import re
-import tempfile
 import xml.etree.ElementTree as ET
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, fields
@@ -623,7 +622,7 @@ def generate_robot_words(
     overrides: Sequence[str] = (),
     progress: Callable[[str], None] | None = None,
 ) -> dict[str, Path]:
-    """Write each word with ``prg-write``'s task (no MLflow run, no recording).
+    """Write each word with one :class:`prg.writer.Writer` (the model loaded once).
 
     Parameters
     ----------
@@ -634,7 +633,7 @@ def generate_robot_words(
         Model family; its checkpoint is ``models/<family>/model.ckpt`` unless ``ckpt`` is given.
     ckpt : path, optional
     overrides : sequence of str
-        More ``prg-write`` overrides (e.g. ``generate.temperature=0.3``).
+        ``prg-write`` settings as its overrides (e.g. ``generate.temperature=0.3``).
     progress : callable, optional
         Called with a line per word.
 
@@ -642,31 +641,25 @@ def generate_robot_words(
     -------
     dict of str to Path
     """
+    from prg.checks import check_values
     from prg.commands.cli import compose_config
-    from prg.commands.write import write
+    from prg.commands.settings import writer_from_config
 
+    args = [f"family={family}", *overrides]
+    if ckpt is not None:
+        args.append(f"ckpt={Path(ckpt).resolve()}")
+    try:
+        cfg = compose_config("write", args)
+    except Exception as err:  # Hydra raises several types for a bad override
+        message = " ".join(str(err).split())
+        raise UsageError(f"robot.write_overrides: {message}") from None
+    check_values(cfg)
+    writer = writer_from_config(cfg)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = {}
-    with tempfile.TemporaryDirectory(prefix=".robot-", dir=out_dir) as scratch:
-        for i, word in enumerate(words):
-            if progress:
-                progress(f"robot writes {word!r} ({i + 1}/{len(words)})")
-            args = [
-                f"text={word}",
-                f"family={family}",
-                "mlflow=false",
-                "record=false",
-                f"out_dir={Path(scratch) / word}",
-                *overrides,
-            ]
-            if ckpt is not None:
-                args.append(f"ckpt={Path(ckpt).resolve()}")
-            try:
-                cfg = compose_config("write", args)
-            except Exception as err:  # Hydra raises several types for a bad override
-                message = " ".join(str(err).split())
-                raise UsageError(f"robot.write_overrides: {message}") from None
-            traj, _ = write(cfg)
-            paths[word] = traj.to_json(out_dir / f"{word}.json")
+    for i, word in enumerate(words):
+        if progress:
+            progress(f"robot writes {word!r} ({i + 1}/{len(words)})")
+        paths[word] = writer.write(text=word).word.to_json(out_dir / f"{word}.json")
     return paths

@@ -10,10 +10,10 @@ from prg.errors import UsageError
 from prg.models.avae import AVAE
 from prg.models.cvae import CVAE
 from prg.models.muse import MUSE
-from prg.pipeline.decode import decode_letters, infer_text, label_inputs, usable_inputs
 from prg.pipeline.compose import GenerateSettings, clean_text
+from prg.pipeline.decode import decode_letters, infer_text, label_inputs, usable_inputs
 from prg.pipeline.timing import rest_to_rest_samples
-from prg.pipeline.generate import write_word  # TODO
+from prg.writer import Perception, Writer
 
 
 def _inputs(n: int) -> dict[str, torch.Tensor]:
@@ -71,9 +71,9 @@ def test_rest_to_rest_timing_keeps_the_path_and_the_mean_speed():
 
 def test_a_word_is_laid_out_connected_and_reproduced_by_one_dmp():
     torch.manual_seed(0)
-    word, path = write_word(
-        MUSE().eval(), "ab cd", label_inputs("ab cd"), GenerateSettings(samples_per_s=150)
-    )
+    writer = Writer(MUSE(), GenerateSettings(samples_per_s=150))
+    result = writer.generate(Perception("ab cd", label_inputs("ab cd")))
+    word, path = result.word, result.rollout
     assert [c for c, _ in word.letters] == list("abcd")
     assert word.segment_kinds.count("connection") == 2 and word.segment_kinds.count("space") == 1
     assert word.dmp["n_basis"] >= 20 and word.duration_s > 0
@@ -87,7 +87,7 @@ def test_a_word_is_laid_out_connected_and_reproduced_by_one_dmp():
 
 def test_inputs_must_match_the_letters():
     with pytest.raises(UsageError, match=r"images= gives 2 letters but the text .* has 3 letters"):
-        write_word(MUSE().eval(), "abc", {"image": torch.rand(2, 1, 28, 28)})
+        Writer(MUSE()).generate(Perception("abc", {"image": torch.rand(2, 1, 28, 28)}))
 
 
 def test_text_is_read_from_images_by_a_family_that_generates_labels():

@@ -47,12 +47,12 @@ from prg.data.preprocess import (
     smooth,
 )
 from prg.errors import UsageError
+from prg.pipeline.compose import GenerateSettings, compose_word
 from prg.pipeline.connect import connect_letters, connection_path, straight_connection
 from prg.pipeline.dmp import fit_dmp, rollout
-from prg.pipeline.compose import GenerateSettings, compose_word
-from prg.pipeline.timing import rest_to_rest_samples
 from prg.pipeline.layout import layout_letters
 from prg.pipeline.perceive import perceive_trajectories
+from prg.pipeline.timing import rest_to_rest_samples
 
 SCALE = float(os.environ.get("PRG_PROPERTY_SCALE", "1"))
 

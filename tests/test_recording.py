@@ -17,7 +17,6 @@ import torch
 from prg.errors import UsageError
 from prg.models.muse import MUSE
 from prg.pipeline.decode import decode_letters, label_inputs
-from prg.pipeline.generate import write_word  # TODO
 from prg.recording import (
     distinct_colours,
     read_component,
@@ -29,6 +28,7 @@ from prg.recording import (
     wav_bytes,
     waveform_envelope,
 )
+from prg.writer import Perception, Writer
 
 TEXT = "ab cd"
 NANOSECOND = 2e-9  # times are stored as integer nanoseconds
@@ -58,7 +58,8 @@ def written(tmp_path_factory):
     torch.manual_seed(0)
     model = MUSE().eval()
     inputs = label_inputs(TEXT)
-    word, rollout = write_word(model, TEXT, inputs)
+    result = Writer(model).generate(Perception(TEXT, inputs))
+    word, rollout = result.word, result.rollout
     letters = decode_letters(model, inputs)
     images = np.random.default_rng(0).random((4, 1, 28, 28)).astype(np.float32)
     audio, rate = _speech(tmp)

@@ -21,7 +21,7 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from prg.errors import UsageError
+from prg.errors import SettingsError, UsageError
 
 SEED_MAX = 2**32 - 1  # numpy's and Lightning's seed range is [0, 2**32 - 1]
 MAX_TEXT_LETTERS = 64  # prg-write: letters in one line of text (all written as one DMP)
@@ -97,8 +97,32 @@ DEGREES = Range(-360, 360)
 WEIGHT_MAX = 1e6  # loss and cost weights
 TEMPERATURE_MAX = 10.0  # latents drawn with their std times this: 1 is the model's own spread
 
+# ---- the fields of library settings classes (each validates itself with its own table) ----
+GENERATE_RANGES: dict[str, Range] = {  # prg.pipeline.compose.GenerateSettings
+    "temperature": non_negative(TEMPERATURE_MAX),
+    "seed": SEED,
+    "impute_steps": count(0, 1000),
+    "speed_cm_s": positive(1000),
+    "ramp_s": non_negative(60),
+    "samples_per_s": positive(10_000),
+    "basis_per_100_samples": count(1, 100),
+}
+
+
+def check_fields(settings: Any, ranges: dict[str, Range]) -> None:
+    """Refuse the first field of a settings dataclass outside its range in ``ranges``
+    (:class:`~prg.errors.SettingsError` naming the field)."""
+    for name, spec in ranges.items():
+        require_number(getattr(settings, name), name, spec)
+
+
+def _under(prefix: str, ranges: dict[str, Range]) -> dict[str, Range]:
+    return {f"{prefix}.{name}": spec for name, spec in ranges.items()}
+
+
 # ---- every numeric option of conf/ (prepare, train, evaluate, write, dictaphone, simulate) ----
 RANGES: dict[str, Range] = {
+    **_under("generate", GENERATE_RANGES),
     # data (prg-prepare; read back by prg-train and prg-evaluate)
     "data.seed": SEED,
     "data.preprocess.n_points": count(2, 4096),
@@ -180,13 +204,6 @@ RANGES: dict[str, Range] = {
     "classifier.lr": positive(10),
     "classifier.seed": SEED,
     # prg-write (and prg-dictaphone, prg-simulate, which run it)
-    "generate.temperature": non_negative(TEMPERATURE_MAX),
-    "generate.seed": SEED,
-    "generate.impute_steps": count(0, 1000),
-    "generate.speed_cm_s": positive(1000),
-    "generate.ramp_s": non_negative(60),
-    "generate.samples_per_s": positive(10_000),
-    "generate.basis_per_100_samples": count(1, 100),
     "layout.*": positive(100),  # cm, or fractions of the letter height
     "connection.delta": positive(10),
     "connection.alpha_max_deg": Range(0, 180, low_open=True),
@@ -256,9 +273,10 @@ def _short(value: Any) -> str:
 
 
 def require_number(value: Any, key: str, spec: Range) -> Any:
-    """``value`` if ``spec`` accepts it, else :class:`UsageError` naming ``key`` and the range."""
+    """``value`` if ``spec`` accepts it, else :class:`~prg.errors.SettingsError` naming ``key``
+    (a config key, or a settings field that the command layer prefixes) and the range."""
     if not spec.accepts(value):
-        raise UsageError(f"{key} must be {spec.describe()}, got {_short(value)}")
+        raise SettingsError(key, f"must be {spec.describe()}, got {_short(value)}")
     return value
 
 

@@ -17,9 +17,12 @@ exports its id in ``PRG_PARENT_RUN_ID``; each job's run is tagged ``mlflow.paren
 
 from __future__ import annotations
 
+import math
 import os
 import tempfile
 import time
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -111,6 +114,69 @@ def task_client(cfg: Any) -> tuple[Any, str]:
         client, cfg.logger.experiment_name, artifact_location(cfg.logger.artifact_location)
     )
     return client, experiment
+
+
+class TaskRun:
+    """An open MLflow run of a command (:func:`task_run`): log params, metrics, text, artifacts."""
+
+    PARAM_CHARS = 500  # MLflow's limit on a param value in older stores
+
+    def __init__(self, client: Any, run_id: str):
+        self.client = client
+        self.run_id = run_id
+
+    def log_params(self, params: Mapping[str, Any]) -> None:
+        """``params`` (nested mappings flattened to ``a.b.c``), each value as text."""
+        for key, value in flatten(dict(params)).items():
+            self.client.log_param(self.run_id, key, str(value)[: self.PARAM_CHARS])
+
+    def log_metrics(self, metrics: Mapping[str, Any], prefix: str = "") -> None:
+        """The finite numbers of ``metrics``, each under ``prefix + key``; others are skipped."""
+        now = int(time.time() * 1000)
+        for key, value in metrics.items():
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                continue
+            if math.isfinite(value):
+                self.client.log_metric(self.run_id, f"{prefix}{key}", float(value), timestamp=now)
+
+    def log_text(self, text: str, name: str) -> None:
+        self.client.log_text(self.run_id, text, name)
+
+    def log_artifacts(self, folder: str | os.PathLike, path: str) -> None:
+        self.client.log_artifacts(self.run_id, str(folder), path)
+
+
+@contextmanager
+def task_run(
+    cfg: Any, task: str, tags: Mapping[str, str] | None = None, enabled: bool = True
+) -> Iterator[TaskRun | None]:
+    """The MLflow run of one command's work, on the configured store (``cfg.logger``,
+    ``cfg.paths.root_dir``), named ``cfg.run_name`` and tagged ``prg.task=<task>`` (and the sweep's
+    parent run inside a Hydra multirun).
+
+    Opened before the work and ended after it: ``FINISHED`` when the block completes, ``FAILED``
+    when it raises, ``KILLED`` when a signal stops it (the error is re-raised either way). With
+    ``enabled=False`` nothing is opened and the block gets ``None``.
+    """
+    if not enabled:
+        yield None
+        return
+    from prg.signals import Interrupted
+
+    client, experiment = task_client(cfg)
+    all_tags = {"prg.task": task, **(tags or {})}
+    if os.environ.get(PARENT_ENV):
+        all_tags["mlflow.parentRunId"] = os.environ[PARENT_ENV]
+    run_id = client.create_run(experiment, run_name=cfg.run_name, tags=all_tags).info.run_id
+    try:
+        yield TaskRun(client, run_id)
+    except (Interrupted, KeyboardInterrupt):
+        client.set_terminated(run_id, status="KILLED")
+        raise
+    except BaseException:
+        client.set_terminated(run_id, status="FAILED")
+        raise
+    client.set_terminated(run_id)
 
 
 def mlflow_logger(

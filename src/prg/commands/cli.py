@@ -35,13 +35,8 @@ from pathlib import Path
 from typing import Any
 
 from prg.errors import PRGError, UsageError
+from prg.resources import config_dir
 from prg.signals import Interrupted, raising_signals, stop_children
-
-
-def config_dir() -> Path:
-    """The repository's ``conf/`` folder (``PRG_CONF_DIR`` overrides it)."""
-    env = os.environ.get("PRG_CONF_DIR")
-    return Path(env) if env else Path(__file__).resolve().parents[2] / "conf"
 
 
 def fail(command: str, message: str, code: int) -> None:

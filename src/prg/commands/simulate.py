@@ -32,13 +32,15 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from omegaconf import DictConfig, OmegaConf, open_dict
+from omegaconf import DictConfig, OmegaConf
 
-from prg.checks import check_values
+from prg.checks import check_values, literal_text
 from prg.commands.cli import check_output, hydra_command
+from prg.commands.settings import writer_from_config
 from prg.errors import UsageError
 from prg.files import staged_outputs, write_json
 from prg.pipeline.word import WordTrajectory
+from prg.tracking import task_run
 
 log = logging.getLogger(__name__)
 
@@ -102,18 +104,6 @@ def _number(value: Any, key: str) -> float:
     return float(value)
 
 
-def _write_word(cfg: DictConfig, out_dir: Path) -> WordTrajectory:
-    """Run ``prg-write``'s task with the composed write settings into ``out_dir``."""
-    from prg.commands.write import write
-
-    write_cfg = cfg.copy()
-    with open_dict(write_cfg):
-        write_cfg.out_dir = str(out_dir)
-        write_cfg.mlflow = False
-    word, _ = write(write_cfg)
-    return word
-
-
 def simulate(cfg: DictConfig) -> tuple[Any, Path]:
     """Task: get the word, simulate the robot writing it, save the outputs (and an MLflow run).
 
@@ -142,30 +132,37 @@ def simulate(cfg: DictConfig) -> tuple[Any, Path]:
     if cfg.word is not None:
         given = Path(cfg.word)
         word = WordTrajectory.from_json(given)
-    with staged_outputs(out_dir) as staging:
-        if given is None:
-            word = _write_word(cfg, staging / "word")
-        else:
-            (staging / "word").mkdir()
-            shutil.copyfile(given, staging / "word" / "word.json")
-        result = simulate_word(word, robot, settings, gui=cfg.gui, progress=cfg.progress)
-        save_outputs(result, staging, record=cfg.record)
-    m = result.metrics
-    log.info(
-        "%s wrote %r (%.1f x %.1f cm): tracking error mean %.4f mm, max %.4f mm; %.1f s simulated "
-        "in %.1f s -> %s",
-        robot.name,
-        word.text,
-        m["word_width_cm"],
-        m["word_height_cm"],
-        m["tracking_error_mean_mm"],
-        m["tracking_error_max_mm"],
-        m["sim_s"],
-        m["wall_s"] + m["ik_wall_s"],
-        out_dir,
-    )
-    if cfg.mlflow:
-        _log_run(cfg, result, out_dir, given)
+    else:
+        text = literal_text(cfg.text, "text")
+        writer = writer_from_config(cfg)
+    tags = {"prg.robot": robot.name}
+    with task_run(cfg, "simulate", tags, enabled=cfg.mlflow) as run:
+        with staged_outputs(out_dir) as staging:
+            if given is None:
+                written = writer.write(text, cfg.audio, cfg.images, cfg.trajectories)
+                written.save(staging / "word", record=cfg.record)
+                word = written.word
+            else:
+                (staging / "word").mkdir()
+                shutil.copyfile(given, staging / "word" / "word.json")
+            result = simulate_word(word, robot, settings, gui=cfg.gui, progress=cfg.progress)
+            save_outputs(result, staging, record=cfg.record)
+        m = result.metrics
+        log.info(
+            "%s wrote %r (%.1f x %.1f cm): tracking error mean %.4f mm, max %.4f mm; %.1f s "
+            "simulated in %.1f s -> %s",
+            robot.name,
+            word.text,
+            m["word_width_cm"],
+            m["word_height_cm"],
+            m["tracking_error_mean_mm"],
+            m["tracking_error_max_mm"],
+            m["sim_s"],
+            m["wall_s"] + m["ik_wall_s"],
+            out_dir,
+        )
+        if run is not None:
+            _log_run(run, cfg, result, out_dir, given)
     return result, out_dir
 
 
@@ -212,16 +209,8 @@ def save_outputs(result, folder: Path, record: bool = True) -> None:
         record_simulation(folder / "sim.rrd", result)
 
 
-def _log_run(cfg: DictConfig, result, out_dir: Path, given: Path | None) -> None:
-    from prg.tracking import flatten, task_client
-
-    client, experiment = task_client(cfg)
-    run = client.create_run(
-        experiment,
-        run_name=cfg.run_name,
-        tags={"prg.task": "simulate", "prg.robot": result.robot.name, "prg.text": result.text},
-    )
-    run_id = run.info.run_id
+def _log_run(run, cfg: DictConfig, result, out_dir: Path, given: Path | None) -> None:
+    run.client.set_tag(run.run_id, "prg.text", result.text)
     params: dict[str, Any] = {
         "robot": result.robot.name,
         "text": result.text,
@@ -230,16 +219,11 @@ def _log_run(cfg: DictConfig, result, out_dir: Path, given: Path | None) -> None
     for key in ("scale", "tempo", "workspace_step_cm"):
         params[key] = cfg[key]
     for group in ("paper", "motion", "control", "ik"):
-        container = OmegaConf.to_container(cfg[group], resolve=True)
-        params.update({f"{group}.{k}": v for k, v in flatten(container).items()})
-    for key, value in params.items():
-        client.log_param(run_id, key, str(value)[:500])
-    for key, value in result.metrics.items():
-        if isinstance(value, int | float) and np.isfinite(value):
-            client.log_metric(run_id, f"simulate/{key}", float(value))
-    client.log_text(run_id, OmegaConf.to_yaml(cfg, resolve=True), "config.yaml")
-    client.log_artifacts(run_id, str(out_dir), "simulate")
-    client.set_terminated(run_id)
+        params[group] = OmegaConf.to_container(cfg[group], resolve=True)
+    run.log_params(params)
+    run.log_metrics(result.metrics, prefix="simulate/")
+    run.log_text(OmegaConf.to_yaml(cfg, resolve=True), "config.yaml")
+    run.log_artifacts(out_dir, "simulate")
 
 
 main = hydra_command(simulate, "simulate", "prg-simulate")

@@ -13,9 +13,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from prg.checks import check_text_length
+from prg.checks import GENERATE_RANGES, check_fields, check_text_length
 from prg.data.alphabet import text_to_labels, unsupported_chars
-from prg.errors import UsageError
+from prg.errors import SettingsError, UsageError
 from prg.pipeline.connect import ConnectionSettings, connect_sequence
 from prg.pipeline.dmp import basis_count, fit_dmp, rollout
 from prg.pipeline.layout import LayoutSettings, layout_letters, word_breaks
@@ -23,6 +23,8 @@ from prg.pipeline.timing import rest_to_rest_samples
 from prg.pipeline.word import DEFAULT_SPEED_CM_S, WordTrajectory, assemble_word
 
 log = logging.getLogger(__name__)
+
+CONNECTION_METHODS = ("alg1", "straight")
 
 
 @dataclass(frozen=True)
@@ -56,12 +58,17 @@ class GenerateSettings:
     layout: LayoutSettings = field(default_factory=LayoutSettings)
     connection: ConnectionSettings = field(default_factory=ConnectionSettings)
 
+    def __post_init__(self) -> None:
+        check_fields(self, GENERATE_RANGES)
+        if self.method not in CONNECTION_METHODS:
+            raise SettingsError("method", f"{self.method!r}: choose alg1 or straight")
+
 
 def compose_word(
     letters: np.ndarray, text: str, params: GenerateSettings | None = None
 ) -> tuple[WordTrajectory, np.ndarray]:
     """The final processing map and the DMP on decoded letters (the second half of
-    :func:`write_word`).
+    :meth:`prg.writer.Writer.generate`).
 
     Parameters
     ----------
@@ -72,7 +79,10 @@ def compose_word(
 
     Returns
     -------
-    word, rollout : as :func:`write_word`.
+    word : WordTrajectory
+        Points, segments, text, timing and the fitted DMP (``word.dmp``).
+    rollout : ndarray, shape (n, 2)
+        The DMP's rollout on the demonstration's time grid.
     """
     params = params or GenerateSettings()
     placed = layout_letters(list(letters), text, params.layout)

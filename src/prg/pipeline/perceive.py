@@ -34,10 +34,12 @@ Image normalisation, step by step (:func:`ink_intensity` then :func:`perceive_le
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import warnings
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 from scipy import ndimage
@@ -419,3 +421,48 @@ def segment_word_image(
         hi = width if j == len(merged) - 1 else (stop + merged[j + 1][0] + 1) // 2
         crops.append(arr[:, lo:hi].copy())
     return crops
+
+
+# --------------------------------------------------------------------------------------------
+# the channels' files
+# --------------------------------------------------------------------------------------------
+
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
+
+
+def read_letter_images(path: str | os.PathLike) -> list[np.ndarray]:
+    """The letters' images from an image of a word (segmented into letters, which must not
+    touch) or from a folder of letter images (one per letter, in the order of their names)."""
+    path = Path(path)
+    if path.is_dir():
+        files = sorted(p for p in path.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+        if not files:
+            raise UsageError(f"images folder {path} holds no {'/'.join(IMAGE_SUFFIXES)} files")
+        return [load_image(f) for f in files]
+    return segment_word_image(load_image(path), name=f"images={path}")
+
+
+def read_trajectories(path: str | os.PathLike) -> tuple[list[np.ndarray], bool]:
+    """The letters' pen strokes and whether their y axis points down, from a JSON file:
+    ``{"strokes": [[[x, y], ...], ...], "y_down": false}`` (one pen-down stroke per letter, any
+    scale) or a bare list of strokes (y up)."""
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise UsageError(f"trajectories file {path} does not exist") from None
+    except (OSError, ValueError) as err:
+        raise UsageError(f"trajectories file {path} is not readable JSON ({err})") from None
+    strokes, y_down = (doc, False) if isinstance(doc, list) else (None, False)
+    if isinstance(doc, dict):
+        strokes, y_down = doc.get("strokes"), bool(doc.get("y_down", False))
+    if not isinstance(strokes, list) or not strokes:
+        raise UsageError(
+            f"trajectories file {path}: expected a non-empty list of strokes, each a list of "
+            '[x, y] points (or {"strokes": [...], "y_down": bool})'
+        )
+    try:
+        arrays = [np.asarray(stroke, dtype=np.float64) for stroke in strokes]
+    except (TypeError, ValueError):
+        raise UsageError(f"trajectories file {path}: strokes must hold [x, y] numbers") from None
+    return arrays, y_down
