@@ -33,7 +33,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from prg.commands.cli import compose_config
-from prg.commands.simulate import settings_from_config
+from prg.commands.settings import simulation_settings
 from prg.pipeline.word import WordTrajectory
 from prg.sim import font_word, simulate_word
 
@@ -58,7 +58,7 @@ def make_words(words: list[str]) -> tuple[dict[str, WordTrajectory], str]:
 
 
 def run(word: WordTrajectory, robot_name: str, method: str) -> dict:
-    robot, settings = settings_from_config(compose_config("simulate", [f"robot={robot_name}"]))
+    robot, settings = simulation_settings(compose_config("simulate", [f"robot={robot_name}"]))
     if method != "refined":
         settings = replace(
             settings, ik=replace(settings.ik, method=method, tolerance_mm=TOLERANCE_MM)

@@ -107,7 +107,7 @@ def time_word(model, text: str, params: GenerateSettings) -> dict:
         "rmse_mm": float(np.sqrt(np.mean(error**2))),
         "max_mm": float(error.max()),
         "points": len(samples),
-        "basis": word.dmp["n_basis"],
+        "basis": word.dmp.n_basis,
         "width_cm": float(np.ptp(word.points[:, 0])),
     }
 

@@ -73,7 +73,7 @@ def word_figure(writer, path: Path) -> str:
     return (
         f'"{WORD}" written by the demo MUSE from its letters\' labels: {len(word.points)} points, '
         f"{word.path_length:.1f} cm of pen path in {word.duration_s:.1f} s; one DMP with "
-        f"{word.dmp['n_basis']} basis functions reproduces it with RMSE {rmse_mm:.3f} mm."
+        f"{word.dmp.n_basis} basis functions reproduces it with RMSE {rmse_mm:.3f} mm."
     )
 
 
@@ -81,12 +81,12 @@ def robot_figure(writer, cfg, path: Path) -> str:
     """The Panda near the end of ``ROBOT_WORD``: a 3/4 view and, inset, a close-up of the page."""
     from PIL import Image
 
-    from prg.commands.simulate import settings_from_config
+    from prg.commands.settings import simulation_settings
     from prg.sim import Scene, simulate_word
     from prg.sim.geometry import runs
     from prg.sim.ink import draw_strokes
 
-    robot, settings = settings_from_config(cfg)
+    robot, settings = simulation_settings(cfg)
     word = writer.write(text=ROBOT_WORD).word
     result = simulate_word(word, robot, settings, render=False)
     inked = np.flatnonzero(result.contact)

@@ -8,7 +8,13 @@ import numpy as np
 import pytest
 
 from prg.data import sigma_lognormal as sl
-from prg.data.augment import AugmentResult, augment, fit_quality_summary, fit_trajectory
+from prg.data.augment import (
+    AugmentResult,
+    AugmentSettings,
+    augment,
+    fit_quality_summary,
+    fit_trajectory,
+)
 from prg.data.preprocess import normalise, resample_arclength
 from prg.errors import UsageError
 from tests.conftest import writer_variation
@@ -75,7 +81,9 @@ def data():
 @pytest.fixture(scope="module")
 def result(data):
     trajs, labels = data
-    return augment(trajs, labels, per_class=30, seed=123, workers=1, progress=False)
+    return augment(
+        trajs, labels, AugmentSettings(per_class=30), seed=123, workers=1, progress=False
+    )
 
 
 # ----------------------------------------------------------------------------------------------
@@ -136,14 +144,20 @@ def test_stats_are_complete_and_json_serialisable(result):
 
 def test_reproducible_by_seed_and_independent_of_workers(data, result):
     trajs, labels = data
-    again = augment(trajs, labels, per_class=30, seed=123, workers=1, progress=False)
+    again = augment(
+        trajs, labels, AugmentSettings(per_class=30), seed=123, workers=1, progress=False
+    )
     np.testing.assert_array_equal(again.trajectories, result.trajectories)
     np.testing.assert_array_equal(again.parent, result.parent)
-    parallel = augment(trajs, labels, per_class=30, seed=123, workers=2, progress=False)
+    parallel = augment(
+        trajs, labels, AugmentSettings(per_class=30), seed=123, workers=2, progress=False
+    )
     np.testing.assert_array_equal(parallel.trajectories, result.trajectories)
     np.testing.assert_array_equal(parallel.labels, result.labels)
     np.testing.assert_array_equal(parallel.parent, result.parent)
-    other = augment(trajs, labels, per_class=30, seed=124, workers=1, progress=False)
+    other = augment(
+        trajs, labels, AugmentSettings(per_class=30), seed=124, workers=1, progress=False
+    )
     assert not np.array_equal(other.trajectories, result.trajectories)
 
 
@@ -165,12 +179,17 @@ def test_failed_fits_are_not_parents_unless_the_class_has_no_fit(data):
     dead = np.zeros((1, 100, 2))  # a zero-extent stroke: its fit fails
     sub = np.concatenate([trajs[:4], dead, trajs[4:5]])  # class 0: 4 good + 1 dead; class 1: 1
     sub_labels = np.array([0, 0, 0, 0, 0, 1])
-    out = augment(sub, sub_labels, per_class=9, seed=1, workers=1, progress=False)
+    out = augment(sub, sub_labels, AugmentSettings(per_class=9), seed=1, workers=1, progress=False)
     assert 4 not in set(out.parent.tolist())
     assert out.stats["n_failed"] == 1 and out.stats["classes_copied"] == 0
     # With an unreachable target nothing fits: every class is copied round-robin, unchanged.
     copied = augment(
-        sub, sub_labels, per_class=7, seed=1, workers=1, progress=False, snr_target_db=400.0
+        sub,
+        sub_labels,
+        AugmentSettings(per_class=7, snr_target_db=400.0),
+        seed=1,
+        workers=1,
+        progress=False,
     )
     assert copied.stats["classes_copied"] == 2 and copied.stats["n_copied"] == 14
     np.testing.assert_array_equal(copied.parent[:7], [0, 1, 2, 3, 4, 0, 1])
@@ -182,13 +201,10 @@ def test_zero_perturbation_reproduces_the_fits(data):
     out = augment(
         trajs[:3],
         labels[:3],
-        per_class=3,
+        AugmentSettings(per_class=3, amplitude=0.0, rotation_deg=0.0, sweep=0.0),
         seed=0,
         workers=1,
         progress=False,
-        amplitude=0.0,
-        rotation_deg=0.0,
-        sweep=0.0,
     )
     for row, parent in enumerate(out.parent):
         fit, t = fit_trajectory(trajs[parent])
@@ -199,22 +215,26 @@ def test_zero_perturbation_reproduces_the_fits(data):
 
 def test_empty_and_invalid_inputs(data):
     trajs, labels = data
-    empty = augment(trajs[:0], labels[:0], per_class=5, seed=0, workers=2, progress=False)
+    empty = augment(
+        trajs[:0], labels[:0], AugmentSettings(per_class=5), seed=0, workers=2, progress=False
+    )
     assert empty.trajectories.shape == (0, 100, 2) and empty.parent.shape == (0,)
-    none = augment(trajs[:2], labels[:2], per_class=0, seed=0, workers=1, progress=False)
+    none = augment(
+        trajs[:2], labels[:2], AugmentSettings(per_class=0), seed=0, workers=1, progress=False
+    )
     assert none.trajectories.shape[0] == 0
     with pytest.raises(UsageError):
-        augment(trajs[:, :, 0], labels, per_class=1, seed=0)
+        augment(trajs[:, :, 0], labels, AugmentSettings(per_class=1), seed=0)
     with pytest.raises(UsageError):
-        augment(trajs, labels[:-1], per_class=1, seed=0)
+        augment(trajs, labels[:-1], AugmentSettings(per_class=1), seed=0)
     with pytest.raises(UsageError):
-        augment(trajs, labels, per_class=-1, seed=0)
+        augment(trajs, labels, AugmentSettings(per_class=-1), seed=0)
     with pytest.raises(UsageError):
-        augment(trajs, labels, per_class=1, seed=0, amplitude=1.5)
+        augment(trajs, labels, AugmentSettings(per_class=1, amplitude=1.5), seed=0)
     bad = trajs.copy()
     bad[0, 0, 0] = np.nan
     with pytest.raises(UsageError):
-        augment(bad, labels, per_class=1, seed=0)
+        augment(bad, labels, AugmentSettings(per_class=1), seed=0)
 
 
 def test_fit_quality_summary():

@@ -5,9 +5,12 @@ import json
 import numpy as np
 import pytest
 
-from prg.data.build import build_dataset
+from prg.data.augment import AugmentSettings
+from prg.data.build import build_dataset, read_data_settings
+from prg.data.preprocess import ImageSettings, PreprocessSettings
 from prg.data.store import load_split
-from prg.errors import UsageError
+from prg.data.synthetic import SyntheticSettings
+from prg.errors import SettingsError, UsageError
 from tests.conftest import small_data_cfg
 
 
@@ -89,6 +92,72 @@ def test_failed_build_leaves_nothing(tmp_path):
 def test_nonsense_numbers_are_named(tmp_path, override, match):
     with pytest.raises(UsageError, match=match):
         build_dataset(small_data_cfg(**override), tmp_path, workers=1, progress=False)
+
+
+@pytest.mark.parametrize(
+    "override, message",
+    [
+        ({"data.seed": -1}, "data.seed must be an integer >= 0, got -1"),
+        (
+            {"data.preprocess.n_points": 1},
+            "data.preprocess.n_points must be an integer >= 2, got 1",
+        ),
+        (
+            {"data.image.margin": -0.5},
+            "data.image.margin must be a finite number >= 0.0, got -0.5",
+        ),
+        (
+            {"data.image.stroke_width": 30.0},
+            "data.image: 2*margin + stroke_width must be < size (28)",
+        ),
+        (
+            {"data.augment.max_components": 0},
+            "data.augment.max_components must be an integer >= 1, got 0",
+        ),
+        (
+            {"data.synthetic.n_writers": 0},
+            "data.synthetic.n_writers must be an integer >= 1, got 0",
+        ),
+        (
+            {"data.synthetic.slant": "[0.5,0.1]"},
+            "data.synthetic.slant range [0.5, 0.1] has min > max",
+        ),
+        (
+            {"data.synthetic.width": "[0.0,1.0]"},
+            "data.synthetic: width and size must be > 0, roundness/jitter >= 0",
+        ),
+        ({"data.name": "../escape"}, "data.name '../escape' must be a plain folder name"),
+    ],
+)
+def test_a_refused_setting_is_named_by_its_config_path(override, message):
+    with pytest.raises(UsageError) as caught:
+        read_data_settings(small_data_cfg(**override))
+    assert str(caught.value) == message
+
+
+@pytest.mark.parametrize(
+    "make, field",
+    [
+        (lambda: PreprocessSettings(n_points=1), "n_points"),
+        (lambda: ImageSettings(size=3), "size"),
+        (lambda: AugmentSettings(per_class=-1), "per_class"),
+        (lambda: AugmentSettings(snr_target_db="high"), "snr_target_db"),
+        (lambda: SyntheticSettings(n_writers=0), "n_writers"),
+        (lambda: SyntheticSettings(fonts=("comic",)), "fonts"),
+    ],
+)
+def test_settings_classes_name_the_field_not_a_config_path(make, field):
+    with pytest.raises(SettingsError) as caught:
+        make()
+    assert caught.value.field == field and str(caught.value).startswith(f"{field} ")
+
+
+def test_read_settings_are_typed_and_match_the_config():
+    settings = read_data_settings(small_data_cfg(**{"data.augment.snr_target_db": 20}))
+    assert settings.name == "synthetic" and settings.synthetic.n_writers == 5
+    assert settings.preprocess == PreprocessSettings(100, 1.0)
+    assert settings.augment.per_class == 3 and type(settings.augment.snr_target_db) is float
+    assert settings.uji is None
 
 
 def _case_twins(a: str, b: str) -> bool:

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from prg.data.preprocess import normalise, resample_arclength
-from prg.errors import UsageError
+from prg.errors import SettingsError, UsageError
 from prg.pipeline.connect import (
     ConnectionSettings,
     connect_letters,
@@ -193,6 +193,29 @@ def test_bad_arguments_are_named(kwargs, match):
     args = {"prev": np.array([[0.0, 0.0], [1.0, 0.0]]), "nxt": np.array([[2.0, 0.0]]), **kwargs}
     with pytest.raises(UsageError, match=match):
         connect_letters(**args)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [
+        ({"delta": 0.0}, "delta"),
+        ({"alpha_max": 4.0}, "alpha_max"),
+        ({"theta_p": -1.0}, "theta_p"),
+        ({"max_steps": -1}, "max_steps"),
+        ({"join": "middle"}, "join"),
+        ({"home_radius": "far"}, "home_radius"),
+    ],
+)
+def test_connection_settings_refuse_bad_values_naming_the_field(kwargs, field):
+    with pytest.raises(SettingsError) as caught:
+        ConnectionSettings(**kwargs)
+    assert caught.value.field == field
+
+
+def test_connection_settings_hold_floats_and_an_integer_step_count():
+    params = ConnectionSettings(delta=1, theta_f=4, max_steps=10.0)
+    assert type(params.delta) is float and type(params.theta_f) is float
+    assert type(params.max_steps) is int and params.max_steps == 10
 
 
 def test_straight_joiner_spaces_points_evenly_at_most_delta_apart():

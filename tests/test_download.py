@@ -18,6 +18,7 @@ from prg.data.download import (
     UJI_ARCHIVE,
     UJI_SHA256,
     UJI_URL,
+    UjiSource,
     check_sha256,
     download,
     fetch_uji,
@@ -153,6 +154,21 @@ def test_checksum_mismatch_keeps_previous_dest(server: Server, tmp_path: Path) -
         download(server.url("/file.bin"), dest, "f" * 64, progress=False)
     assert dest.read_bytes() == b"old"
     assert os.listdir(tmp_path) == ["file.bin"]
+
+
+def test_a_failed_move_into_place_names_the_destination(
+    server: Server, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    dest = tmp_path / "file.bin"
+
+    def refuse(src, dst):  # as a rename over a read-only destination fails
+        raise PermissionError(13, "Permission denied", str(src), None, str(dst))
+
+    monkeypatch.setattr(os, "replace", refuse)
+    with pytest.raises(DownloadError) as info:
+        download(server.url("/file.bin"), dest, sha(PAYLOAD), progress=False)
+    assert str(info.value).endswith(f"Permission denied: '{dest}'")  # not the temporary name
+    assert os.listdir(tmp_path) == []
 
 
 def test_interrupted_transfer_leaves_nothing(server: Server, tmp_path: Path) -> None:
@@ -296,10 +312,13 @@ def test_fetch_uji_rejects_archive_without_data(server: Server, tmp_path: Path) 
 
 
 def test_resolve_prefers_local_copy(server: Server, tmp_path: Path) -> None:
-    assert resolve_uji_path(str(FIXTURE), tmp_path, True, server.url("/uji.zip"), None) == FIXTURE
+    assert (
+        resolve_uji_path(UjiSource(str(FIXTURE), True, server.url("/uji.zip"), None), tmp_path)
+        == FIXTURE
+    )
     archive = tmp_path / "mine.zip"
     archive.write_bytes(UJI_ZIP)
-    got = resolve_uji_path(str(archive), tmp_path, False, server.url("/uji.zip"), None)
+    got = resolve_uji_path(UjiSource(str(archive), False, server.url("/uji.zip"), None), tmp_path)
     assert got == archive
     assert len(read_uji(got)) == 6
     assert server.requests == []
@@ -308,27 +327,27 @@ def test_resolve_prefers_local_copy(server: Server, tmp_path: Path) -> None:
 def test_resolve_local_path_errors(tmp_path: Path) -> None:
     missing = tmp_path / "nope.txt"
     with pytest.raises(UsageError, match=r"data\.uji_path=.*nope\.txt: no such file"):
-        resolve_uji_path(str(missing), tmp_path, True, UJI_URL, UJI_SHA256)
+        resolve_uji_path(UjiSource(str(missing), True, UJI_URL, UJI_SHA256), tmp_path)
     with pytest.raises(UsageError, match="no such file"):
-        resolve_uji_path(str(tmp_path), tmp_path, True, UJI_URL, UJI_SHA256)
+        resolve_uji_path(UjiSource(str(tmp_path), True, UJI_URL, UJI_SHA256), tmp_path)
     bad_zip = tmp_path / "bad.zip"
     bad_zip.write_bytes(make_zip({"a.csv": b"1", "b.csv": b"2"}))
     with pytest.raises(UsageError, match=r"bad\.zip: the zip holds no ujipenchars2\.txt"):
-        resolve_uji_path(str(bad_zip), tmp_path, True, UJI_URL, UJI_SHA256)
+        resolve_uji_path(UjiSource(str(bad_zip), True, UJI_URL, UJI_SHA256), tmp_path)
 
 
 def test_resolve_without_path_or_download(tmp_path: Path) -> None:
     with pytest.raises(UsageError, match=r"no UJI data: .*data\.uji_path=.*data\.download=true"):
-        resolve_uji_path(None, tmp_path, False, UJI_URL, UJI_SHA256)
+        resolve_uji_path(UjiSource(None, False, UJI_URL, UJI_SHA256), tmp_path)
     with pytest.raises(UsageError, match="no UJI data"):
-        resolve_uji_path("  ", tmp_path, False, UJI_URL, UJI_SHA256)
+        resolve_uji_path(UjiSource("  ", False, UJI_URL, UJI_SHA256), tmp_path)
 
 
 def test_resolve_downloads_then_reuses_fetched_copy(server: Server, tmp_path: Path) -> None:
     url, digest = server.url("/uji.zip"), sha(UJI_ZIP)
-    fetched = resolve_uji_path(None, tmp_path, True, url, digest, progress=False)
+    fetched = resolve_uji_path(UjiSource(None, True, url, digest), tmp_path, progress=False)
     assert fetched == tmp_path / "raw" / "uji" / "ujipenchars2.txt"
-    assert resolve_uji_path(None, tmp_path, False, url, digest) == fetched
+    assert resolve_uji_path(UjiSource(None, False, url, digest), tmp_path) == fetched
     assert server.requests == ["/uji.zip"]
     with pytest.raises(UsageError, match="no UJI data"):  # a copy not matching the pin
-        resolve_uji_path(None, tmp_path, False, url, "2" * 64)
+        resolve_uji_path(UjiSource(None, False, url, "2" * 64), tmp_path)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from prg.data.preprocess import normalise, resample_arclength
-from prg.errors import UsageError
+from prg.errors import SettingsError, UsageError
 from prg.pipeline.layout import (
     LayoutSettings,
     layout_letters,
@@ -132,6 +132,10 @@ def test_bad_layout_values_are_named():
         LayoutSettings(letter_height=0.0)
     with pytest.raises(UsageError, match="gap must be a non-negative"):
         LayoutSettings(gap=-0.1)
+    with pytest.raises(SettingsError) as caught:  # the field, not a config path
+        LayoutSettings(max_width=-1.0)
+    assert str(caught.value) == "max_width must be a positive number, got -1.0"
+    assert str(caught.value.under("layout")).startswith("layout.max_width ")
 
 
 def test_word_breaks_mark_pairs_separated_by_spaces():

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from mlflow import MlflowClient
 
-from prg import paper_scale
+from prg.commands import paper_scale
 from prg.tracking import sqlite_uri
 
 TINY = [
@@ -143,7 +143,9 @@ def test_bad_options_are_one_line_with_exit_2_before_anything_starts(
     assert exit_info.value.code == 2
     captured = capsys.readouterr()
     lines = captured.err.splitlines()
-    assert len(lines) == 1 and lines[0].startswith("prg.commands.paper_scale: error: "), captured.err
+    assert len(lines) == 1 and lines[0].startswith("prg.commands.paper_scale: error: "), (
+        captured.err
+    )
     assert expected in lines[0]
     assert captured.out == ""
     assert list(tmp_path.iterdir()) == []  # no folder, no process

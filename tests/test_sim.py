@@ -4,20 +4,23 @@ outputs, and the Rerun recording read back from disk."""
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from prg.commands.cli import compose_config
-from prg.commands.simulate import settings_from_config
 from prg.errors import UsageError
 from prg.recording import read_component, read_entities, read_times
+from prg.recording.simulation import recording_urdf
 from prg.sim import (
     IKSolver,
+    Paper,
     ReachMap,
+    RobotSettings,
     Scene,
+    SimSettings,
     UnreachableError,
     check_workspace,
     font_word,
@@ -27,13 +30,14 @@ from prg.sim import (
     simulate_word,
 )
 from prg.sim.geometry import bounding_box, runs
-from prg.sim.record import recording_urdf
 
 FLOAT32_M = 2e-6  # positions in the recording are float32 metres
 
 
-def _config(*overrides: str):
-    return settings_from_config(compose_config("simulate", list(overrides)))
+def _config(robot: str = "panda", **changes):
+    """A robot of conf/robot/ and the settings of conf/simulate.yaml (the library defaults),
+    with ``changes``."""
+    return RobotSettings.named(robot), replace(SimSettings(), **changes)
 
 
 @pytest.fixture(scope="module")
@@ -69,8 +73,7 @@ def test_the_ink_lands_where_the_word_was_placed(panda_hi):
 
 
 def test_two_words_are_two_strokes_with_the_pen_lifted_in_between():
-    robot, settings = _config()
-    result = simulate_word(font_word("l l"), robot, settings, render=False)
+    result = simulate_word(font_word("l l"), "panda", render=False)  # conf/simulate.yaml's settings
     m = result.metrics
     assert m["commanded_strokes"] == m["ink_strokes"] == 2
     assert m["ink_to_command_max_mm"] < 0.5  # no ink on the travel between the words
@@ -81,7 +84,7 @@ def test_two_words_are_two_strokes_with_the_pen_lifted_in_between():
 
 
 def test_the_iiwa_loads_and_writes_a_letter():
-    robot, settings = _config("robot=iiwa")
+    robot, settings = _config("iiwa")
     assert robot.name == "iiwa"
     result = simulate_word(font_word("c"), robot, settings, render=False)
     assert result.metrics["tracking_error_mean_mm"] < 0.5
@@ -90,7 +93,7 @@ def test_the_iiwa_loads_and_writes_a_letter():
 
 @pytest.mark.parametrize("name", ["panda", "iiwa"])
 def test_both_robots_load_with_seven_arm_joints_and_reach_the_paper_pen_down(name):
-    robot, settings = _config(f"robot={name}")
+    robot, settings = _config(name)
     with Scene(robot, settings.paper) as scene:
         assert len(scene.robot.arm) == 7
         assert scene.robot.config.flange_link == robot.flange_link
@@ -122,7 +125,7 @@ def test_an_unreachable_target_is_named():
 
 
 def test_a_word_too_large_for_the_workspace_is_refused_with_the_scale_that_fits():
-    robot, settings = _config("paper.size_cm=[150,100]")
+    robot, settings = _config(paper=Paper(size_cm=(150.0, 100.0)))
     word = font_word("joy")
     low, high = bounding_box(word.points)
     anchor = (low + high) / 2
@@ -138,7 +141,7 @@ def test_a_word_too_large_for_the_workspace_is_refused_with_the_scale_that_fits(
 
 
 def test_a_word_off_the_paper_is_refused_before_anything_moves():
-    robot, settings = _config("scale=30", "workspace_step_cm=4")
+    robot, settings = _config(scale=30.0, workspace_step_cm=4.0)
     with pytest.raises(UsageError, match=r"off the paper; at most [\d.]+ cm wide .* set scale="):
         simulate_word(font_word("joy"), robot, settings)
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from prg.errors import UsageError
+from prg.errors import SettingsError, UsageError
 from prg.pipeline.connect import subdivide
 from prg.pipeline.word import assemble_word
 from prg.sim.geometry import (
@@ -44,8 +44,13 @@ def test_paper_frame_puts_the_writing_line_along_world_minus_y_and_round_trips()
 
 
 def test_paper_rejects_a_bad_size_naming_it():
-    with pytest.raises(UsageError, match=r"paper\.size_cm"):
+    with pytest.raises(SettingsError, match=r"^size_cm must be two positive numbers") as err:
         Paper(size_cm=(0.0, 10.0))
+    assert err.value.field == "size_cm"
+    from prg.sim import SimSettings
+
+    with pytest.raises(UsageError, match=r"^paper\.size_cm must be two positive numbers"):
+        SimSettings.from_mapping({"paper": {"size_cm": [0.0, 10.0]}})
 
 
 def test_place_points_scales_about_the_anchor_and_moves_it_to_the_target():
@@ -189,11 +194,11 @@ def test_word_samples_follow_the_dmp_at_its_tempo():
 
     word = font_word("ab")
     samples, t, down = word_samples(word, dt=1 / 60)
-    assert t[-1] == pytest.approx(word.dmp["tau"]) and down.all()
+    assert t[-1] == pytest.approx(word.dmp.tau) and down.all()
     assert np.diff(t).max() == pytest.approx(1 / 60, rel=0.05)
     assert distance_to_polylines(samples, [word.points]).max() < 0.01  # within 0.1 mm
     slow, t2, _ = word_samples(word, dt=2 / 60, tempo=2.0)
-    assert t2[-1] == pytest.approx(2 * word.dmp["tau"])
+    assert t2[-1] == pytest.approx(2 * word.dmp.tau)
     assert_allclose(slow, samples, atol=1e-9)  # same samples, twice the time
 
 

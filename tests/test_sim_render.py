@@ -4,15 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from prg.commands.cli import compose_config
-from prg.commands.simulate import settings_from_config
-from prg.sim import Scene
+from prg.sim import RobotSettings, Scene, SimSettings
 
 EYE, TARGET = (-0.4, 1.0, 1.45), (0.42, 0.02, 0.85)  # docs/make_figures.py's 3/4 view
 
 
 def test_a_three_quarter_view_shows_the_arm_over_the_lit_page():
-    robot, settings = settings_from_config(compose_config("simulate", []))
+    robot, settings = RobotSettings.named("panda"), SimSettings()  # conf/simulate.yaml's
     with Scene(robot, settings.paper) as scene:
         view = scene.render_view(EYE, TARGET, size=(240, 160))
         assert np.array_equal(view, scene.render_view(EYE, TARGET, size=(240, 160)))

@@ -12,6 +12,7 @@ from PIL import Image
 from prg.data.preprocess import normalise, resample_arclength
 from prg.errors import UsageError
 from prg.pipeline.connect import ConnectionSettings, connect_sequence
+from prg.pipeline.dmp import DMP, fit_dmp
 from prg.pipeline.layout import layout_letters, word_breaks
 from prg.pipeline.word import WordTrajectory, _atomic_write, assemble_word
 from tests.conftest import letter_like
@@ -31,7 +32,7 @@ def letters_cm(text: str = TEXT, seed: int = 0) -> list[np.ndarray]:
 def word() -> WordTrajectory:
     placed = letters_cm()
     connections = connect_sequence(placed, breaks=word_breaks(TEXT))
-    dmp = {"n_basis": 30, "tau": 1.5, "start": [0.0, 0.1], "weights": [[0.5, -1e-3]] * 3}
+    dmp = fit_dmp(np.concatenate(placed), tau=1.5, n_basis=30)
     return assemble_word(placed, connections, TEXT, speed_cm_s=2.5, dmp=dmp)
 
 
@@ -78,18 +79,25 @@ def test_json_round_trip_is_exact(word, tmp_path):
     np.testing.assert_array_equal(back.segment, word.segment)
     assert back.segment_kinds == word.segment_kinds
     assert back.text == word.text
-    assert back.dmp == word.dmp
+    assert isinstance(back.dmp, DMP) and back.dmp.to_dict() == word.dmp.to_dict()
     assert (back.speed_cm_s, back.duration_s) == (word.speed_cm_s, word.duration_s)
     assert json.loads(path.read_text())["version"] == 1
 
 
-def test_numpy_values_in_the_dmp_are_stored_as_json(tmp_path):
-    placed = letters_cm("ab")
-    w = assemble_word(
-        placed, connect_sequence(placed), "ab", dmp={"w": np.eye(2), "n": np.int64(3)}
-    )
-    back = WordTrajectory.from_json(w.to_json(tmp_path / "w.json"))
-    assert back.dmp == {"w": [[1.0, 0.0], [0.0, 1.0]], "n": 3}
+def test_the_dmp_is_stored_as_its_to_dict_and_rewritten_byte_for_byte(word, tmp_path):
+    path = word.to_json(tmp_path / "w.json")
+    assert json.loads(path.read_text())["dmp"] == word.dmp.to_dict()
+    back = WordTrajectory.from_json(path)
+    assert back.to_json(tmp_path / "again.json").read_bytes() == path.read_bytes()
+    no_dmp = assemble_word(letters_cm("ab"), connect_sequence(letters_cm("ab")), "ab")
+    assert json.loads(no_dmp.to_json(tmp_path / "plain.json").read_text())["dmp"] is None
+
+
+def test_a_word_holds_a_dmp_object_not_its_dict(word):
+    with pytest.raises(UsageError, match="dmp must be a DMP or None, got dict"):
+        WordTrajectory(
+            word.points, word.segment, word.segment_kinds, word.text, dmp=word.dmp.to_dict()
+        )
 
 
 def test_writing_leaves_no_temporary_files(word, tmp_path):
@@ -144,6 +152,7 @@ def test_corrupt_json_is_a_one_line_usage_error_naming_the_file(tmp_path, conten
         ("text", "abc", "has 3 characters but there are 4 letter segments"),
         ("speed_cm_s", -1.0, "speed_cm_s must be a positive"),
         ("dmp", [1, 2], "dmp must be a dict"),
+        ("dmp", {"tau": 1.0}, r"invalid DMP \(DMP data: missing keys"),
     ],
 )
 def test_inconsistent_documents_are_refused(word, tmp_path, field, value, match):

@@ -112,6 +112,22 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         _remove(tmp)
 
 
+def move_into_place(tmp: str | os.PathLike, path: str | os.PathLike) -> Path:
+    """Rename the finished temporary file ``tmp`` (written beside ``path``) over ``path``: atomic
+    within a file system. An :class:`OSError` names ``path``, not ``tmp``; ``tmp`` is then left
+    for the caller to remove. Returns ``path``.
+
+    For writers that make their own temporary file (a download that streams and verifies it);
+    other writers use :func:`atomic_path`.
+    """
+    tmp, path = Path(tmp), Path(path)
+    try:
+        os.replace(tmp, path)
+    except OSError as err:
+        _raise_naming_final(err, tmp, path)
+    return path
+
+
 def write_bytes(path: str | os.PathLike, data: bytes, *, atomic: bool = True) -> Path:
     """Write ``data`` to ``path`` atomically (``atomic=False``: in place, for a path that is
     already a temporary name, e.g. from :func:`atomic_path`)."""
@@ -213,6 +229,7 @@ def staged_outputs(target: str | os.PathLike):
 __all__ = [
     "atomic_path",
     "json_text",
+    "move_into_place",
     "remove_stale",
     "staged_folder",
     "staged_outputs",

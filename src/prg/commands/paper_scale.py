@@ -531,8 +531,12 @@ def _duration(seconds: float) -> str:
     return f"{minutes} m {secs:02d} s" if minutes else f"{seconds:.1f} s"
 
 
-def _module_argv(module: str, overrides: list[str]) -> list[str]:
-    return [sys.executable, "-m", module, *overrides]
+def _module_job(
+    name: str, module: str, overrides: list[str], log: Path, threads: int | None = None
+) -> Job:
+    """``python -m module overrides`` as the job ``name``, logging to ``log`` (``threads``: the
+    child's BLAS/OpenMP thread count; ``None`` leaves it to the environment)."""
+    return Job(name, [sys.executable, "-m", module, *overrides], log, _child_env(threads))
 
 
 def run(args: argparse.Namespace, console: Console) -> dict[str, Any]:
@@ -631,12 +635,7 @@ def _stages(
         ]
         overrides = [o for o in overrides if not o.startswith(("logger.", "seed="))]
         overrides += args.prepare_set
-        job = Job(
-            "prepare",
-            _module_argv("prg.commands.prepare", overrides),
-            root / "logs/prepare.log",
-            _child_env(None),
-        )
+        job = _module_job("prepare", "prg.commands.prepare", overrides, root / "logs/prepare.log")
         begin = time.perf_counter()
         run_stage("prepare", [job], console, args.progress_every)
         stages["prepare"] = {"seconds": round(time.perf_counter() - begin, 2)}
@@ -645,14 +644,12 @@ def _stages(
         trainings = list(args.families)
         threads = args.threads or max(1, cores // (len(trainings) + 1))
         jobs = [
-            Job(
+            _module_job(
                 f,
-                _module_argv(
-                    "prg.commands.train",
-                    train_overrides(args, root, f, accelerator) + _common(args, root, f"train-{f}"),
-                ),
+                "prg.commands.train",
+                train_overrides(args, root, f, accelerator) + _common(args, root, f"train-{f}"),
                 root / f"logs/train-{f}.log",
-                _child_env(threads),
+                threads,
             )
             for f in trainings
         ]
@@ -664,11 +661,12 @@ def _stages(
             *_common(args, root, "classifiers"),
         ]
         jobs.append(
-            Job(
+            _module_job(
                 "classifiers",
-                _module_argv("prg.commands.evaluate", classifier),
+                "prg.commands.evaluate",
+                classifier,
                 root / "logs/classifiers.log",
-                _child_env(threads),
+                threads,
             )
         )
         console.say(
@@ -688,12 +686,7 @@ def _stages(
         *eval_overrides(args, root, accelerator),
         *_common(args, root, "evaluate"),
     ]
-    job = Job(
-        "evaluate",
-        _module_argv("prg.commands.evaluate", evaluate),
-        root / "logs/evaluate.log",
-        _child_env(None),
-    )
+    job = _module_job("evaluate", "prg.commands.evaluate", evaluate, root / "logs/evaluate.log")
     begin = time.perf_counter()
     try:
         run_stage("evaluate", [job], console, args.progress_every)

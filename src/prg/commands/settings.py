@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from omegaconf import DictConfig, OmegaConf
 
@@ -22,6 +22,9 @@ from prg.pipeline.connect import ConnectionSettings
 from prg.pipeline.layout import LayoutSettings
 from prg.pipeline.speech import SpeechSettings
 from prg.writer import Writer
+
+if TYPE_CHECKING:
+    from prg.sim import RobotSettings, SimSettings
 
 MAX_LEXICON_BYTES = 1_000_000  # a word list, not a dictionary dump: about 100,000 words
 
@@ -104,3 +107,18 @@ def writer_from_config(cfg: DictConfig) -> Writer:
     return Writer.from_checkpoint(
         checkpoint_path(cfg), settings=generate, speech=speech, on_unknown=cfg.on_unknown
     )
+
+
+def simulation_settings(cfg: DictConfig) -> tuple[RobotSettings, SimSettings]:
+    """``robot`` as :class:`~prg.sim.robots.RobotSettings` and the simulation nodes (``paper``,
+    ``motion``, ``control``, ``ik``, ``camera``, ``scale``, ``tempo``, ``workspace_step_cm``) as
+    :class:`~prg.sim.settings.SimSettings`."""
+    from prg.sim import RobotSettings, SimSettings
+
+    try:
+        robot = RobotSettings.from_dict(node(cfg, "robot"))
+    except SettingsError as err:
+        raise err.under("robot") from None
+    values = {key: node(cfg, key) for key in ("paper", "motion", "control", "ik", "camera")}
+    values |= {key: cfg[key] for key in ("scale", "tempo", "workspace_step_cm")}
+    return robot, SimSettings.from_mapping(values)

@@ -25,20 +25,18 @@ wall time, their ratio, robot, word size), ``sim.rrd`` (Rerun: ``rerun sim.rrd``
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import shutil
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
 from prg.checks import check_values, literal_text
 from prg.commands.cli import check_output, hydra_command
-from prg.commands.settings import writer_from_config
+from prg.commands.settings import simulation_settings, writer_from_config
 from prg.errors import UsageError
-from prg.files import staged_outputs, write_json
+from prg.files import staged_outputs
 from prg.pipeline.word import WordTrajectory
 from prg.tracking import task_run
 
@@ -46,62 +44,6 @@ log = logging.getLogger(__name__)
 
 CHANNELS = ("text", "audio", "images", "trajectories")
 OUTPUTS = ("ink.png", "ink.svg", "page.png", "joints.csv", "joints.npz", "metrics.json")
-
-
-def settings_from_config(cfg: DictConfig):
-    """The robot (:class:`~prg.sim.robots.RobotSettings`) and the simulation settings
-    (:class:`~prg.sim.writing.SimSettings`) of the composed config; one line on a bad value."""
-    from prg.sim import (
-        Camera,
-        ControlSettings,
-        IKSettings,
-        MotionSettings,
-        Paper,
-        RobotSettings,
-        SimSettings,
-    )
-
-    def node(key: str, cls: type | None = None) -> dict[str, Any]:
-        """The config node ``key``; a numeric field of ``cls`` must hold a number."""
-        values = OmegaConf.to_container(cfg[key], resolve=True)
-        types = {f.name: f.type for f in dataclasses.fields(cls)} if cls else {}
-        for name, value in values.items():
-            kind = types.get(name)
-            if kind in ("int", "float") or (kind == "float | None" and value is not None):
-                _number(value, f"{key}.{name}")
-        return values
-
-    paper = node("paper")
-    word_centre = paper.pop("word_centre_cm")
-    try:
-        robot = RobotSettings.from_dict(node("robot"))
-        settings = SimSettings(
-            paper=Paper(
-                size_cm=tuple(paper["size_cm"]),
-                centre=tuple(paper["centre"]),
-                yaw_deg=_number(paper["yaw_deg"], "paper.yaw_deg"),
-                thickness_m=_number(paper["thickness_m"], "paper.thickness_m"),
-            ),
-            motion=MotionSettings(**node("motion", MotionSettings)),
-            control=ControlSettings(**node("control", ControlSettings)),
-            ik=IKSettings(**node("ik", IKSettings)),
-            camera=Camera(**node("camera", Camera)),
-            scale=_number(cfg.scale, "scale"),
-            word_centre_cm=tuple(word_centre),
-            tempo=_number(cfg.tempo, "tempo"),
-            workspace_step_cm=_number(cfg.workspace_step_cm, "workspace_step_cm"),
-        )
-    except (TypeError, ValueError, KeyError) as err:
-        if isinstance(err, UsageError):
-            raise
-        raise UsageError(f"simulate settings: {err}") from None
-    return robot, settings
-
-
-def _number(value: Any, key: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise UsageError(f"{key} must be a number, got {value!r}")
-    return float(value)
 
 
 def simulate(cfg: DictConfig) -> tuple[Any, Path]:
@@ -126,7 +68,7 @@ def simulate(cfg: DictConfig) -> tuple[Any, Path]:
             "nothing to write: give word=WORD.json (from prg-write) or text=WORD "
             "(prg-write runs first; also audio=, images=, trajectories=)"
         )
-    robot, settings = settings_from_config(cfg)
+    robot, settings = simulation_settings(cfg)
     out_dir = check_output(cfg.out_dir, "out_dir")
     given = None
     if cfg.word is not None:
@@ -146,7 +88,7 @@ def simulate(cfg: DictConfig) -> tuple[Any, Path]:
                 (staging / "word").mkdir()
                 shutil.copyfile(given, staging / "word" / "word.json")
             result = simulate_word(word, robot, settings, gui=cfg.gui, progress=cfg.progress)
-            save_outputs(result, staging, record=cfg.record)
+            result.save(staging, record=cfg.record)
         m = result.metrics
         log.info(
             "%s wrote %r (%.1f x %.1f cm): tracking error mean %.4f mm, max %.4f mm; %.1f s "
@@ -164,49 +106,6 @@ def simulate(cfg: DictConfig) -> tuple[Any, Path]:
         if run is not None:
             _log_run(run, cfg, result, out_dir, given)
     return result, out_dir
-
-
-def save_outputs(result, folder: Path, record: bool = True) -> None:
-    """``ink.png``, ``ink.svg``, ``page.png``, ``joints.csv``, ``joints.npz``, ``metrics.json``
-    and (``record``) ``sim.rrd`` of a :class:`~prg.sim.SimResult` into ``folder``."""
-    from PIL import Image
-
-    from prg.sim import ink_png, ink_svg, record_simulation
-
-    folder = Path(folder)
-    strokes = result.ink_strokes()
-    ink_png(strokes, folder / "ink.png")
-    ink_svg(strokes, folder / "ink.svg", title=f"{result.text} ({result.robot.name})")
-    if result.page is not None:
-        Image.fromarray(result.page).save(folder / "page.png")
-    names = result.arm_joint_names
-    columns = np.column_stack(
-        [result.t, result.q, result.tip_paper, result.contact.astype(np.float64)]
-    )
-    header = ",".join(["t_s", *names, "tip_x_cm", "tip_y_cm", "tip_height_cm", "ink"])
-    fmt = ["%.6f"] + ["%.8f"] * len(names) + ["%.6f"] * 3 + ["%d"]
-    np.savetxt(folder / "joints.csv", columns, delimiter=",", header=header, comments="", fmt=fmt)
-    np.savez_compressed(
-        folder / "joints.npz",
-        t=result.t,
-        joint_names=np.array(names),
-        q=result.q,
-        q_target=result.q_target,
-        tip_world=result.tip_world,
-        tip_quaternion=result.tip_quaternion,
-        tip_paper=result.tip_paper,
-        commanded=result.commanded,
-        contact=result.contact,
-        plan_t=result.plan.t,
-        plan_tip=result.plan.tip,
-        plan_pen_down=result.plan.pen_down,
-        plan_stroke=result.plan.stroke,
-        plan_phase=result.plan.phase,
-        q_plan=result.q_plan,
-    )
-    write_json(folder / "metrics.json", result.metrics)
-    if record:
-        record_simulation(folder / "sim.rrd", result)
 
 
 def _log_run(run, cfg: DictConfig, result, out_dir: Path, given: Path | None) -> None:

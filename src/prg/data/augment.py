@@ -45,10 +45,42 @@ from tqdm.auto import tqdm
 from prg.data import sigma_lognormal as sl
 from prg.data.preprocess import normalise, resample_arclength
 from prg.errors import PRGError, UsageError
+from prg.fields import check_fields, checked, integer, number
 
 _CHUNK = 32  # trajectories per fit task
 _DRAW_CHUNK = 512  # samples per draw task
 _DENSITY = 4  # time samples per original sample when evaluating a perturbed stroke
+
+
+@dataclass(frozen=True)
+class AugmentSettings:
+    """Settings of :func:`augment` (``data.augment`` in the Hydra config).
+
+    Attributes
+    ----------
+    enabled : bool
+        Whether the dataset build augments at all (its switch; :func:`augment` ignores it).
+    per_class : int
+        New samples per class (originals not included), ``>= 0``.
+    snr_target_db : float
+        Point SNR a fit must reach (:func:`prg.data.sigma_lognormal.fit`).
+    max_components : int
+        Most lognormal components of a fit, ``>= 1``.
+    amplitude, rotation_deg, sweep : float
+        Perturbation ranges (:func:`prg.data.sigma_lognormal.perturb`), ``>= 0``; :func:`augment`
+        also needs ``amplitude < 1``.
+    """
+
+    enabled: bool = True
+    per_class: int = checked(1000, integer, minimum=0)
+    snr_target_db: float = checked(20.0, number)
+    max_components: int = checked(15, integer)
+    amplitude: float = checked(0.1, number, minimum=0.0)
+    rotation_deg: float = checked(5.0, number, minimum=0.0)
+    sweep: float = checked(0.05, number, minimum=0.0)
+
+    def __post_init__(self) -> None:
+        check_fields(self)
 
 
 @dataclass
@@ -273,18 +305,14 @@ def _run_tasks(
 def augment(
     trajectories: np.ndarray,
     labels: np.ndarray,
-    per_class: int = 1000,
+    settings: AugmentSettings | None = None,
+    *,
     seed: int = 0,
     workers: int = 2,
     progress: bool = True,
-    snr_target_db: float = 20.0,
-    max_components: int = 15,
-    amplitude: float = 0.1,
-    rotation_deg: float = 5.0,
-    sweep: float = 0.05,
     max_redraws: int = 10,
 ) -> AugmentResult:
-    """Generate ``per_class`` sigma-lognormal variations for every class.
+    """Generate ``settings.per_class`` sigma-lognormal variations for every class.
 
     Parameters
     ----------
@@ -292,18 +320,14 @@ def augment(
         Preprocessed originals (equidistant, normalised).
     labels : ndarray, shape (N,)
         Class of each original.
-    per_class : int
-        New samples per class (originals not included).
+    settings : AugmentSettings, optional
+        Samples per class, fit settings and perturbation ranges; default ``AugmentSettings()``.
     seed : int
         Seed of all random draws (see the module docstring for how streams are derived).
     workers : int
         Processes; ``1`` runs everything inline.
     progress : bool
         Show tqdm progress bars.
-    snr_target_db, max_components : float, int
-        Fit settings (:func:`prg.data.sigma_lognormal.fit`).
-    amplitude, rotation_deg, sweep : float
-        Perturbation ranges (:func:`prg.data.sigma_lognormal.perturb`).
     max_redraws : int
         Redraws of a degenerate sample before the original is copied.
 
@@ -316,6 +340,9 @@ def augment(
     UsageError
         On malformed inputs or settings.
     """
+    settings = settings or AugmentSettings()
+    per_class = settings.per_class
+    amplitude, rotation_deg, sweep = settings.amplitude, settings.rotation_deg, settings.sweep
     trajs = np.asarray(trajectories, dtype=np.float64)
     labels = np.asarray(labels)
     if trajs.ndim != 3 or trajs.shape[2] != 2 or trajs.shape[1] < 3:
@@ -348,7 +375,8 @@ def augment(
     try:
         start = time.perf_counter()
         starts = list(range(0, n_in, _CHUNK))
-        tasks = [(trajs[i : i + _CHUNK], snr_target_db, max_components) for i in starts]
+        fit_settings = (settings.snr_target_db, settings.max_components)
+        tasks = [(trajs[i : i + _CHUNK], *fit_settings) for i in starts]
         sizes = [min(_CHUNK, n_in - i) for i in starts]
         with tqdm(total=n_in, desc="fit sigma-lognormal", disable=not progress) as bar:
             chunks = _run_tasks(_fit_chunk, tasks, pool, bar, sizes)

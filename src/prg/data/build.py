@@ -18,16 +18,27 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from omegaconf import DictConfig, OmegaConf
 from tqdm.auto import tqdm
 
 import prg
 from prg.data.alphabet import ALPHABET, char_to_label
-from prg.data.preprocess import TRAJ_LAYOUT, preprocess_stroke, render_batch
+from prg.data.augment import AugmentSettings, augment
+from prg.data.download import UJI_SHA256, UJI_URL, UjiSource, resolve_uji_path
+from prg.data.preprocess import (
+    TRAJ_LAYOUT,
+    ImageSettings,
+    PreprocessSettings,
+    preprocess_stroke,
+    render_batch,
+)
 from prg.data.samples import RawSample
 from prg.data.splits import SPLITS, split_writers
 from prg.data.store import save_split
-from prg.data.uji import select_single_stroke_alphabet
-from prg.errors import UsageError
+from prg.data.synthetic import SyntheticSettings, generate
+from prg.data.uji import read_uji, select_single_stroke_alphabet
+from prg.errors import SettingsError, UsageError
+from prg.fields import check_fields, checked, integer
 from prg.files import atomic_path, json_text, sha256_file, staged_folder, write_json, write_text
 from prg.signals import deferred
 
@@ -46,72 +57,104 @@ class BuildResult:
     timings: dict[str, float] = field(default_factory=dict)
 
 
-def _plain(cfg: Any) -> Any:
-    """OmegaConf node or mapping -> plain Python containers."""
+@dataclass(frozen=True)
+class DataSettings:
+    """The ``data`` node of the config (``conf/data/*.yaml``), typed: :func:`read_data_settings`.
+
+    Attributes
+    ----------
+    name : str
+        Folder of the dataset under ``<data_dir>/prepared/``: a plain folder name.
+    source : str
+        ``synthetic`` or ``uji`` (:data:`SOURCES`), checked when the source is read.
+    seed : int
+        Seed of the splits, the augmentation and the figures, ``>= 0``.
+    preprocess, image, augment
+        The settings of those stages.
+    splits : mapping
+        Fractions of the writers per split, checked by :func:`~prg.data.splits.split_writers`.
+    synthetic : SyntheticSettings or None
+        The synthetic source's settings (source ``synthetic``).
+    uji : UjiSource or None
+        Where the UJI data comes from (source ``uji``).
+    """
+
+    name: str
+    source: str
+    seed: int = checked(0, integer, minimum=0)
+    preprocess: PreprocessSettings = field(default_factory=PreprocessSettings)
+    image: ImageSettings = field(default_factory=ImageSettings)
+    augment: AugmentSettings = field(default_factory=AugmentSettings)
+    splits: Mapping[str, Any] = field(default_factory=dict)
+    synthetic: SyntheticSettings | None = None
+    uji: UjiSource | None = None
+
+    def __post_init__(self) -> None:
+        if not self.name or "/" in self.name or self.name.startswith("."):
+            raise SettingsError("name", f"{self.name!r} must be a plain folder name")
+        check_fields(self)
+
+
+_SECTIONS = {"preprocess": PreprocessSettings, "image": ImageSettings, "augment": AugmentSettings}
+_TUPLES = ("fonts", "slant", "width", "size", "rotation_deg", "roundness", "jitter")  # YAML lists
+
+
+def _read(cls: type, values: Any, key: str, **extra: Any) -> Any:
+    """``cls(**values, **extra)`` for the config node ``key``; a refused value is named by its
+    path (``data.image.size``), a rule between fields or an unknown field under ``key``."""
     try:
-        from omegaconf import DictConfig, ListConfig, OmegaConf
-
-        if isinstance(cfg, DictConfig | ListConfig):
-            return OmegaConf.to_container(cfg, resolve=True)
-    except ImportError:  # pragma: no cover - omegaconf is a dependency
-        pass
-    return cfg
+        return cls(**(values or {}), **extra)
+    except SettingsError as err:
+        raise err.under(key) from None
+    except (TypeError, UsageError) as err:
+        raise UsageError(f"{key}: {err}") from None
 
 
-def _positive_int(value: Any, name: str, minimum: int = 1) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
-        raise UsageError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    return int(value)
+def read_data_settings(data: Any) -> DataSettings:
+    """The ``data`` node (plain containers, interpolations resolved) as :class:`DataSettings`.
 
-
-def _number(value: Any, name: str, minimum: float | None = None, strict: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float | np.number):
-        raise UsageError(f"{name} must be a number, got {value!r}")
-    value = float(value)
-    if not np.isfinite(value) or (
-        minimum is not None and (value <= minimum if strict else value < minimum)
-    ):
-        bound = f"> {minimum}" if strict else f">= {minimum}"
-        raise UsageError(f"{name} must be a finite number {bound}, got {value!r}")
-    return value
+    Raises
+    ------
+    UsageError
+        Naming the config path of a refused value (``data.preprocess.n_points``).
+    """
+    if not isinstance(data, Mapping):
+        raise UsageError("the data config must be a mapping (conf/data/*.yaml)")
+    sections = {key: _read(cls, data.get(key), f"data.{key}") for key, cls in _SECTIONS.items()}
+    if data.get("source") == "synthetic":
+        syn = dict(data.get("synthetic") or {})
+        syn.update({key: tuple(syn[key]) for key in _TUPLES if key in syn})
+        syn.setdefault("seed", data.get("seed", 0))
+        sections["synthetic"] = _read(SyntheticSettings, syn, "data.synthetic")
+    elif data.get("source") == "uji":
+        sections["uji"] = UjiSource(
+            path=data.get("uji_path"),
+            download=bool(data.get("download", False)),
+            url=data.get("uji_url") or UJI_URL,
+            sha256=data.get("uji_sha256") or UJI_SHA256,
+        )
+    scalars = {
+        "name": str(data.get("name") or ""),
+        "source": data.get("source"),
+        "seed": data.get("seed", 0),
+        "splits": data.get("splits") or {},
+    }
+    return _read(DataSettings, scalars, "data", **sections)
 
 
 def load_raw_samples(
-    data: Mapping[str, Any], data_dir: Path, progress: bool
+    settings: DataSettings, data_dir: Path, progress: bool
 ) -> tuple[list[RawSample], dict[str, Any]]:
     """Read the configured source; returns the raw samples and a description of the input."""
-    source = data.get("source")
-    if source == "synthetic":
-        from prg.data.synthetic import SyntheticSettings, generate
-
-        syn = dict(data.get("synthetic") or {})
-        for key in ("fonts", "slant", "width", "size", "rotation_deg", "roundness", "jitter"):
-            if key in syn:
-                syn[key] = tuple(syn[key])
-        syn.setdefault("seed", data.get("seed", 0))
-        try:
-            cfg = SyntheticSettings(**syn)
-        except TypeError as err:
-            raise UsageError(f"data.synthetic: {err}") from None
-        _positive_int(cfg.n_writers, "data.synthetic.n_writers")
-        _positive_int(cfg.samples_per_char, "data.synthetic.samples_per_char")
-        samples = generate(cfg)
-        return samples, {"kind": "synthetic", "sha256": cfg.fingerprint(), "path": None}
-    if source == "uji":
-        from prg.data.download import UJI_SHA256, UJI_URL, resolve_uji_path
-        from prg.data.uji import read_uji
-
-        path = resolve_uji_path(
-            data.get("uji_path"),
-            data_dir,
-            bool(data.get("download", False)),
-            data.get("uji_url") or UJI_URL,
-            data.get("uji_sha256") or UJI_SHA256,
-            progress=progress,
-        )
+    if settings.source == "synthetic":
+        synthetic = settings.synthetic or SyntheticSettings(seed=settings.seed)
+        samples = generate(synthetic)
+        return samples, {"kind": "synthetic", "sha256": synthetic.fingerprint(), "path": None}
+    if settings.source == "uji":
+        path = resolve_uji_path(settings.uji or UjiSource(), data_dir, progress=progress)
         samples = read_uji(path)
         return samples, {"kind": "uji", "sha256": sha256_file(path), "path": str(path)}
-    raise UsageError(f"unknown data source {source!r}: accepted are {list(SOURCES)}")
+    raise UsageError(f"unknown data source {settings.source!r}: accepted are {list(SOURCES)}")
 
 
 def preprocess_samples(
@@ -183,26 +226,12 @@ def build_dataset(
     -------
     BuildResult
     """
-    data = _plain(data_cfg)
-    if not isinstance(data, Mapping):
-        raise UsageError("the data config must be a mapping (conf/data/*.yaml)")
-    name = str(data.get("name") or "")
-    if not name or "/" in name or name.startswith("."):
-        raise UsageError(f"data.name {name!r} must be a plain folder name")
-    seed = _positive_int(data.get("seed", 0), "data.seed", minimum=0)
-    workers = _positive_int(workers, "workers")
-    pre = data.get("preprocess") or {}
-    n_points = _positive_int(pre.get("n_points", 100), "data.preprocess.n_points", minimum=2)
-    smooth_sigma = _number(pre.get("smooth_sigma", 1.0), "data.preprocess.smooth_sigma", 0.0)
-    img = data.get("image") or {}
-    size = _positive_int(img.get("size", 28), "data.image.size", minimum=4)
-    stroke_width = _number(img.get("stroke_width", 2.0), "data.image.stroke_width", 0.0, True)
-    margin = _number(img.get("margin", 2.0), "data.image.margin", 0.0)
-    if 2 * margin + stroke_width >= size:
-        raise UsageError(f"data.image: 2*margin + stroke_width must be < size ({size})")
-    aug = data.get("augment") or {}
-    aug_enabled = bool(aug.get("enabled", True))
-    per_class = _positive_int(aug.get("per_class", 1000), "data.augment.per_class", minimum=0)
+    data = data_cfg
+    if isinstance(data_cfg, DictConfig):
+        data = OmegaConf.to_container(data_cfg, resolve=True)
+    settings = read_data_settings(data)
+    workers = integer(workers, "workers")
+    seed, n_points, image = settings.seed, settings.preprocess.n_points, settings.image
     data_dir = Path(data_dir)
 
     timings: dict[str, float] = {}
@@ -215,10 +244,12 @@ def build_dataset(
         clock = now
         log.info("%s: %.2f s", stage, timings[stage])
 
-    raw, input_info = load_raw_samples(data, data_dir, progress)
+    raw, input_info = load_raw_samples(settings, data_dir, progress)
     usable, selection = select_single_stroke_alphabet(raw)
     lap("parse")
-    trajs, usable, degenerate = preprocess_samples(usable, n_points, smooth_sigma, progress)
+    trajs, usable, degenerate = preprocess_samples(
+        usable, n_points, settings.preprocess.smooth_sigma, progress
+    )
     selection["dropped_degenerate"] = degenerate
     selection["kept"] = len(usable)
     if not usable:
@@ -228,11 +259,13 @@ def build_dataset(
         )
     labels = np.array([char_to_label(s.char) for s in usable], dtype=np.int64)
     writers = np.array([s.writer for s in usable])
-    assignment = split_writers(writers.tolist(), data.get("splits") or {}, seed)
+    assignment = split_writers(writers.tolist(), settings.splits, seed)
     lap("preprocess")
 
     split_arrays: dict[str, dict[str, np.ndarray]] = {}
-    fit_stats: dict[str, Any] = {"enabled": aug_enabled and per_class > 0}
+    fit_stats: dict[str, Any] = {
+        "enabled": bool(settings.augment.enabled) and settings.augment.per_class > 0
+    }
     for split in SPLITS:
         mask = np.isin(writers, assignment[split])
         split_arrays[split] = {
@@ -243,23 +276,14 @@ def build_dataset(
             "parent": np.full(mask.sum(), -1, dtype=np.int64),
         }
     if fit_stats["enabled"]:
-        from prg.data.augment import augment
-
         train = split_arrays["train"]
         result = augment(
             train["traj"],
             train["label"],
-            per_class=per_class,
+            settings.augment,
             seed=seed,
             workers=workers,
             progress=progress,
-            snr_target_db=_number(aug.get("snr_target_db", 20.0), "data.augment.snr_target_db"),
-            max_components=_positive_int(
-                aug.get("max_components", 15), "data.augment.max_components"
-            ),
-            amplitude=_number(aug.get("amplitude", 0.1), "data.augment.amplitude", 0.0),
-            rotation_deg=_number(aug.get("rotation_deg", 5.0), "data.augment.rotation_deg", 0.0),
-            sweep=_number(aug.get("sweep", 0.05), "data.augment.sweep", 0.0),
         )
         timing_keys = ("fit_seconds", "fit_seconds_mean")  # wall times: not in the manifest
         fit_stats.update({k: v for k, v in result.stats.items() if k not in timing_keys})
@@ -276,16 +300,17 @@ def build_dataset(
 
     for split in SPLITS:
         arrays = split_arrays[split]
-        images = np.zeros((len(arrays["traj"]), size, size), np.uint8)
+        images = np.zeros((len(arrays["traj"]), image.size, image.size), np.uint8)
         starts = range(0, len(images), _RENDER_CHUNK)
         for i in tqdm(starts, desc=f"render {split}", disable=not progress, leave=False):
-            ink = render_batch(arrays["traj"][i : i + _RENDER_CHUNK], size, stroke_width, margin)
+            chunk = arrays["traj"][i : i + _RENDER_CHUNK]
+            ink = render_batch(chunk, image.size, image.stroke_width, image.margin)
             images[i : i + _RENDER_CHUNK] = np.round(ink * 255).astype(np.uint8)
         arrays["image"] = images
         arrays["traj"] = arrays["traj"].reshape(len(arrays["traj"]), -1).astype(np.float32)
     lap("render")
 
-    final = data_dir / "prepared" / name
+    final = data_dir / "prepared" / settings.name
     # the metrics file is renamed into place last (outer block), after the dataset folder
     with contextlib.ExitStack() as stack:
         metrics_tmp = stack.enter_context(atomic_path(metrics_path)) if metrics_path else None
@@ -293,7 +318,7 @@ def build_dataset(
         for split in SPLITS:
             save_split(tmp / f"{split}.npz", split_arrays[split])
         manifest = _manifest(
-            data, name, input_info, selection, assignment, split_arrays, fit_stats, size
+            data, settings, input_info, selection, assignment, split_arrays, fit_stats
         )
         write_json(tmp / "manifest.json", manifest)
         lap("write")
@@ -309,7 +334,7 @@ def build_dataset(
     return BuildResult(final, manifest, timings)
 
 
-def _manifest(data, name, input_info, selection, assignment, split_arrays, fit_stats, size):
+def _manifest(data, settings, input_info, selection, assignment, split_arrays, fit_stats):
     counts = {
         split: {
             "total": len(arrays["label"]),
@@ -322,9 +347,10 @@ def _manifest(data, name, input_info, selection, assignment, split_arrays, fit_s
         }
         for split, arrays in split_arrays.items()
     }
+    size = settings.image.size
     return {
-        "name": name,
-        "source": data["source"],
+        "name": settings.name,
+        "source": settings.source,
         "input": input_info,
         "selection": selection,
         "splits": assignment,
@@ -332,7 +358,7 @@ def _manifest(data, name, input_info, selection, assignment, split_arrays, fit_s
         "augmentation": fit_stats,
         "format": {
             "files": [f"{s}.npz" for s in SPLITS],
-            "traj": f"float32 (N, {2 * (data.get('preprocess') or {}).get('n_points', 100)}), "
+            "traj": f"float32 (N, {2 * settings.preprocess.n_points}), "
             f"{TRAJ_LAYOUT} x1, y1, x2, y2, ...; centred, max |coord| = 1, y up",
             "image": f"uint8 (N, {size}, {size}), ink 0..255 (divide by 255 for [0, 1])",
             "label": "int64 (N,), 0-9 -> 0..9, A-Z -> 10..35, a-z -> 36..61",

@@ -1,8 +1,9 @@
 """Atomic, checksum-verified downloads, and fetching the UJI Pen Characters v2 data.
 
 A download streams into a hidden ``.<name>.tmp-<pid>`` file next to its destination,
-hashing as it goes, and only an ``os.replace`` of a complete, verified file creates the
-destination. Any failure removes the partial file and raises :class:`~prg.errors.DownloadError`.
+hashing as it goes, and only a complete, verified file is moved into place
+(:func:`prg.files.move_into_place`, an atomic rename) as the destination. Any failure removes the
+partial file and raises :class:`~prg.errors.DownloadError`.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ import urllib.error
 import urllib.request
 import zipfile
 import zlib
+from dataclasses import dataclass
 from pathlib import Path
 from typing import BinaryIO
 
@@ -24,7 +26,7 @@ from tqdm import tqdm
 
 from prg.data.uji import UJI_MEMBER, find_member
 from prg.errors import DownloadError, UsageError
-from prg.files import remove_stale, sha256_file
+from prg.files import move_into_place, remove_stale, sha256_file
 
 UJI_URL = "https://archive.ics.uci.edu/static/public/177/uji+pen+characters+version+2.zip"
 """The UCI ML repository archive of UJI Pen Characters (Version 2), dataset 177 (CC BY 4.0)."""
@@ -179,7 +181,7 @@ def download(
             raise DownloadError(
                 f"checksum mismatch for {url}: expected sha256 {expected}, got {actual}"
             )
-        os.replace(part, dest)
+        move_into_place(part, dest)
     except BaseException as exc:
         part.unlink(missing_ok=True)
         if isinstance(exc, DownloadError):
@@ -220,7 +222,7 @@ def extract_uji(archive: Path, dest: Path) -> Path:
                 )
             with zipped.open(member) as source:  # reads no more than the declared size
                 shutil.copyfileobj(source, out, _CHUNK)
-        os.replace(part, dest)
+        move_into_place(part, dest)
     except BaseException as exc:
         part.unlink(missing_ok=True)
         if isinstance(exc, zipfile.BadZipFile | OSError):
@@ -303,39 +305,49 @@ def fetch_uji(
         raise DownloadError(f"the archive downloaded from {url} is unusable: {exc}") from None
 
 
-def resolve_uji_path(
-    uji_path: str | None,
-    data_dir: Path,
-    download: bool,
-    url: str = UJI_URL,
-    sha256: str | None = UJI_SHA256,
-    *,
-    progress: bool = True,
-) -> Path:
+@dataclass(frozen=True)
+class UjiSource:
+    """Where the UJI data comes from (``data.uji_path``, ``data.download``, ``data.uji_url`` and
+    ``data.uji_sha256`` in the Hydra config).
+
+    Attributes
+    ----------
+    path : str or None
+        A local ``ujipenchars2.txt`` or the UCI ``.zip`` (both are read by
+        :func:`prg.data.uji.read_uji`); used as is, without a checksum check.
+    download : bool
+        Whether fetching from ``url`` is allowed when no usable copy is present.
+    url, sha256 : str, str or None
+        The archive and its expected SHA-256 (:func:`fetch_uji`).
+    """
+
+    path: str | None = None
+    download: bool = False
+    url: str = UJI_URL
+    sha256: str | None = UJI_SHA256
+
+
+def resolve_uji_path(source: UjiSource, data_dir: Path, *, progress: bool = True) -> Path:
     """Where to read the UJI data from: the user's copy, a fetched copy, or a new download.
 
     Parameters
     ----------
-    uji_path : str or None
-        ``data.uji_path``: a local ``ujipenchars2.txt`` or the UCI ``.zip`` (both are read by
-        :func:`prg.data.uji.read_uji`); used as is, without a checksum check.
+    source : UjiSource
+        The user's copy, if any, and whether and from where to download one.
     data_dir : Path
         Data root; fetched files go to ``<data_dir>/raw/uji/``.
-    download : bool
-        Whether fetching from ``url`` is allowed when no usable copy is present.
-    url, sha256 : str, str or None
-        Passed to :func:`fetch_uji`.
     progress : bool
         Show a progress bar while downloading.
 
     Raises
     ------
     UsageError
-        If ``uji_path`` is missing, unreadable or a zip without the data file, or if there is no
-        path, no usable fetched copy and ``download`` is false.
+        If ``source.path`` is missing, unreadable or a zip without the data file, or if there is
+        no path, no usable fetched copy and ``source.download`` is false.
     DownloadError
         If the download fails.
     """
+    uji_path, url, sha256 = source.path, source.url, source.sha256
     if uji_path is not None and str(uji_path).strip():
         path = Path(str(uji_path).strip()).expanduser()
         if not path.is_file():
@@ -353,7 +365,7 @@ def resolve_uji_path(
         except (OSError, zipfile.BadZipFile) as exc:
             raise UsageError(f"data.uji_path={uji_path}: cannot read it ({exc})") from None
         return path
-    if download:
+    if source.download:
         return fetch_uji(data_dir, url=url, sha256=sha256, progress=progress)
     cached = _cached(Path(data_dir) / "raw" / "uji", check_sha256(sha256))
     if cached is not None:

@@ -12,12 +12,58 @@ Flat layout used everywhere a trajectory is a vector (model batches, dataset fil
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
 from prg.errors import UsageError
+from prg.fields import check_fields, checked, integer, number
 
 TRAJ_LAYOUT = "interleaved"  # flat vector = points.reshape(-1): x1, y1, x2, y2, ...
+
+
+@dataclass(frozen=True)
+class PreprocessSettings:
+    """Settings of :func:`preprocess_stroke` (``data.preprocess`` in the Hydra config).
+
+    Attributes
+    ----------
+    n_points : int
+        Points after equidistant resampling (100 in the paper), at least 2.
+    smooth_sigma : float
+        Gaussian smoothing (see :func:`preprocess_stroke`), ``>= 0``.
+    """
+
+    n_points: int = checked(100, integer, minimum=2)
+    smooth_sigma: float = checked(1.0, number, minimum=0.0)
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+
+
+@dataclass(frozen=True)
+class ImageSettings:
+    """Settings of :func:`render` (``data.image`` in the Hydra config), in pixels.
+
+    Attributes
+    ----------
+    size : int
+        Image side, at least 4.
+    stroke_width : float
+        Stroke width, ``> 0``.
+    margin : float
+        Empty border, ``>= 0``; ``2 * margin + stroke_width`` must leave room to draw (``< size``).
+    """
+
+    size: int = checked(28, integer, minimum=4)
+    stroke_width: float = checked(2.0, number, minimum=0.0, strict=True)
+    margin: float = checked(2.0, number, minimum=0.0)
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        if 2 * self.margin + self.stroke_width >= self.size:  # a rule between fields: no one field
+            raise UsageError(f"2*margin + stroke_width must be < size ({self.size})")
 
 
 def _check_points(points: np.ndarray, name: str = "points", min_len: int = 2) -> np.ndarray:
@@ -32,16 +78,8 @@ def _check_points(points: np.ndarray, name: str = "points", min_len: int = 2) ->
 
 
 def flip_y(points: np.ndarray) -> np.ndarray:
-    """Mirror the y axis (tablet/font coordinates point down; ours point up).
-
-    Parameters
-    ----------
-    points : ndarray, shape (n, 2)
-
-    Returns
-    -------
-    ndarray, shape (n, 2)
-    """
+    """A copy of ``points`` (n, 2) with the y axis mirrored (tablet and font coordinates point
+    down; ours point up)."""
     out = np.array(points, dtype=np.float64, copy=True)
     out[:, 1] = -out[:, 1]
     return out
@@ -72,17 +110,8 @@ def smooth(points: np.ndarray, sigma: float) -> np.ndarray:
 
 
 def arc_length(points: np.ndarray) -> np.ndarray:
-    """Cumulative arc length at each point.
-
-    Parameters
-    ----------
-    points : ndarray, shape (n, 2)
-
-    Returns
-    -------
-    ndarray, shape (n,)
-        ``s[0] = 0`` and ``s[-1]`` the total length.
-    """
+    """Cumulative arc length at each of ``points`` (n, 2): shape (n,), ``s[0] = 0`` and ``s[-1]``
+    the total length."""
     steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
     return np.concatenate([[0.0], np.cumsum(steps)])
 
@@ -124,17 +153,8 @@ def resample_arclength(points: np.ndarray, n: int) -> np.ndarray:
 
 
 def normalise(points: np.ndarray) -> np.ndarray:
-    """Centre on the mean point and scale so the largest absolute coordinate is 1.
-
-    Parameters
-    ----------
-    points : ndarray, shape (n, 2)
-
-    Returns
-    -------
-    ndarray, shape (n, 2)
-        Aspect ratio kept; all coordinates in ``[-1, 1]``.
-    """
+    """``points`` (n, 2) centred on their mean point and scaled so that the largest absolute
+    coordinate is 1: aspect ratio kept, all coordinates in ``[-1, 1]``."""
     arr = _check_points(points)
     centred = arr - arr.mean(axis=0)
     scale = np.abs(centred).max()

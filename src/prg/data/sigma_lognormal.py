@@ -117,57 +117,29 @@ def _lognormal_terms(params: np.ndarray, t: np.ndarray):
     return tau, active, z, cdf, pdf
 
 
+def _speeds_and_cdf(params: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The parameters (k, 6), each component's speed ``v_i(t)`` (k, n) and ``Phi(z)`` (k, n)."""
+    p = _as_params(params)
+    tau, _, _, cdf, pdf = _lognormal_terms(p, np.asarray(t, dtype=np.float64))
+    return p, p[:, D, None] * pdf / (p[:, SIGMA, None] * tau), cdf
+
+
 def speed(params: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Pen speed (norm of the summed velocity, not the sum of component speeds).
-
-    Parameters
-    ----------
-    params : ndarray, shape (k, 6)
-    t : ndarray, shape (n,)
-
-    Returns
-    -------
-    ndarray, shape (n,)
-        Norm of :func:`velocity`.
-    """
+    """Pen speed at times ``t`` (n,), shape (n,): the norm of :func:`velocity` (not the sum of the
+    component speeds)."""
     return np.linalg.norm(velocity(params, t), axis=1)
 
 
 def component_speeds(params: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Lognormal speed profile of every component.
-
-    Parameters
-    ----------
-    params : ndarray, shape (k, 6)
-    t : ndarray, shape (n,)
-
-    Returns
-    -------
-    ndarray, shape (k, n)
-        ``v_i(t)``, zero for ``t <= t0``.
-    """
-    p = _as_params(params)
-    t = np.asarray(t, dtype=np.float64)
-    tau, _, _, _, pdf = _lognormal_terms(p, t)
-    return p[:, D, None] * pdf / (p[:, SIGMA, None] * tau)
+    """Lognormal speed profile ``v_i(t)`` of every component of ``params`` (k, 6) at times ``t``
+    (n,): shape (k, n), zero for ``t <= t0``."""
+    return _speeds_and_cdf(params, t)[1]
 
 
 def velocity(params: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Pen velocity: the vector sum of the components.
-
-    Parameters
-    ----------
-    params : ndarray, shape (k, 6)
-    t : ndarray, shape (n,)
-
-    Returns
-    -------
-    ndarray, shape (n, 2)
-    """
-    p = _as_params(params)
-    t = np.asarray(t, dtype=np.float64)
-    tau, _, _, cdf, pdf = _lognormal_terms(p, t)
-    v = p[:, D, None] * pdf / (p[:, SIGMA, None] * tau)
+    """Pen velocity, the vector sum of the components of ``params`` (k, 6) at times ``t`` (n,):
+    shape (n, 2)."""
+    p, v, cdf = _speeds_and_cdf(params, t)
     phi = p[:, THETA_S, None] + (p[:, THETA_E, None] - p[:, THETA_S, None]) * cdf
     return np.column_stack([(v * np.cos(phi)).sum(0), (v * np.sin(phi)).sum(0)])
 

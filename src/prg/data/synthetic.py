@@ -33,17 +33,22 @@ from scipy.ndimage import gaussian_filter1d
 from prg.data.alphabet import ALPHABET
 from prg.data.preprocess import resample_arclength
 from prg.data.samples import RawSample
-from prg.errors import UsageError
+from prg.errors import SettingsError, UsageError
+from prg.fields import check_fields, checked, integer
 
 FONTS: tuple[str, ...] = ("futural", "rowmans", "scripts", "cursive")
 
 
 @dataclass(frozen=True)
 class SyntheticSettings:
-    """Settings of the synthetic source (``data.synthetic`` in the Hydra config)."""
+    """Settings of the synthetic source (``data.synthetic`` in the Hydra config).
 
-    n_writers: int = 60
-    samples_per_char: int = 2
+    A refused value raises :class:`~prg.errors.SettingsError` naming its field; ranges whose ends
+    are out of order or sign raise :class:`~prg.errors.UsageError` naming the fields.
+    """
+
+    n_writers: int = checked(60, integer)
+    samples_per_char: int = checked(2, integer)
     fonts: tuple[str, ...] = FONTS
     seed: int = 0
     slant: tuple[float, float] = (-0.35, 0.25)  # shear dx = slant * height, writer range
@@ -57,24 +62,19 @@ class SyntheticSettings:
     points_per_unit: float = 2.0  # raw sampling density along the stroke (points per font unit)
 
     def __post_init__(self):
-        for name in ("n_writers", "samples_per_char"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise UsageError(f"data.synthetic.{name} must be an integer >= 1, got {value!r}")
+        check_fields(self)
         unknown = [f for f in self.fonts if f not in FONTS]
         if unknown or not self.fonts:
-            raise UsageError(
-                f"data.synthetic.fonts has {unknown or 'nothing'}: accepted are {list(FONTS)}"
-            )
+            raise SettingsError("fonts", f"has {unknown or 'nothing'}: accepted are {list(FONTS)}")
         for name in ("slant", "width", "size", "rotation_deg", "roundness", "jitter"):
             pair = getattr(self, name)
             if len(pair) != 2 or not all(isinstance(v, int | float) for v in pair):
-                raise UsageError(f"data.synthetic.{name} must be [min, max] numbers, got {pair!r}")
+                raise SettingsError(name, f"must be [min, max] numbers, got {pair!r}")
             lo, hi = pair
             if lo > hi:
-                raise UsageError(f"data.synthetic.{name} range [{lo}, {hi}] has min > max")
+                raise SettingsError(name, f"range [{lo}, {hi}] has min > max")
         if self.width[0] <= 0 or self.size[0] <= 0 or self.roundness[0] < 0 or self.jitter[0] < 0:
-            raise UsageError("data.synthetic: width and size must be > 0, roundness/jitter >= 0")
+            raise UsageError("width and size must be > 0, roundness/jitter >= 0")
 
     def fingerprint(self) -> str:
         """SHA-256 of the settings and the font package version: the synthetic 'input checksum'."""

@@ -198,6 +198,10 @@ def parse_uji(lines: Iterable[str], path: str = "<string>") -> list[RawSample]:
         lines = split_lines(lines)
     samples: list[RawSample] = []
     entry: _Entry | None = None
+
+    def malformed(message: str) -> DataFormatError:  # about the line being read
+        return DataFormatError(message, path=path, line=number)
+
     for number, raw in enumerate(lines, start=1):
         parts = (raw.lstrip("\ufeff") if number == 1 else raw).split(None, 1)
         if not parts or parts[0].startswith("//"):
@@ -207,57 +211,38 @@ def parse_uji(lines: Iterable[str], path: str = "<string>") -> list[RawSample]:
         if keyword == "WORD":
             fields = rest.split()
             if len(fields) != 2:
-                raise DataFormatError(
-                    f"WORD line needs a character and a session id, got {rest.strip()!r}",
-                    path=path,
-                    line=number,
+                raise malformed(
+                    f"WORD line needs a character and a session id, got {rest.strip()!r}"
                 )
             if entry is not None:
                 samples.append(_finish(entry, path, number))
             entry = _Entry(fields[0], fields[1], number)
         elif keyword == "NUMSTROKES":
             if entry is None:
-                raise DataFormatError(
-                    "NUMSTROKES outside an entry (no WORD line before it)", path=path, line=number
-                )
+                raise malformed("NUMSTROKES outside an entry (no WORD line before it)")
             if entry.num_strokes is not None:
-                raise DataFormatError(
-                    f"second NUMSTROKES line in the entry started at line {entry.line}",
-                    path=path,
-                    line=number,
-                )
+                raise malformed(f"second NUMSTROKES line in the entry started at line {entry.line}")
             fields = rest.split()
             if len(fields) != 1:
-                raise DataFormatError(
-                    f"NUMSTROKES line needs one count, got {rest.strip()!r}", path=path, line=number
-                )
+                raise malformed(f"NUMSTROKES line needs one count, got {rest.strip()!r}")
             entry.num_strokes = _positive_int(fields[0], "NUMSTROKES", path, number)
             entry.num_line = number
         elif keyword == "POINTS":
             if entry is None:
-                raise DataFormatError(
-                    "POINTS outside an entry (no WORD line before it)", path=path, line=number
-                )
+                raise malformed("POINTS outside an entry (no WORD line before it)")
             if entry.num_strokes is None:
-                raise DataFormatError(
-                    f"POINTS line before NUMSTROKES in the entry started at line {entry.line}",
-                    path=path,
-                    line=number,
+                raise malformed(
+                    f"POINTS line before NUMSTROKES in the entry started at line {entry.line}"
                 )
             if len(entry.strokes) == entry.num_strokes:
-                raise DataFormatError(
-                    f"more POINTS lines than NUMSTROKES {entry.num_strokes} "
-                    f"(line {entry.num_line})",
-                    path=path,
-                    line=number,
+                raise malformed(
+                    f"more POINTS lines than NUMSTROKES {entry.num_strokes} (line {entry.num_line})"
                 )
             entry.strokes.append(_parse_points(rest, path, number))
         else:
             shown = keyword if len(keyword) <= 40 else keyword[:40] + "..."
-            raise DataFormatError(
-                f"unknown line starting with {shown!r}; {_FORMAT_HINT} or '//' comments",
-                path=path,
-                line=number,
+            raise malformed(
+                f"unknown line starting with {shown!r}; {_FORMAT_HINT} or '//' comments"
             )
     if entry is not None:
         samples.append(_finish(entry, path, None))

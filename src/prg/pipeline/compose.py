@@ -95,7 +95,7 @@ def compose_word(
     )
     n_basis = basis_count(len(samples), per_100_points=params.basis_per_100_samples)
     dmp = fit_dmp(samples, tau=duration, n_basis=n_basis)
-    word.dmp = dmp.to_dict()
+    word.dmp = dmp
     word.duration_s = duration
     return word, rollout(dmp)
 

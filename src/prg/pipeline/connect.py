@@ -87,16 +87,51 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, astuple, dataclass
 from typing import Literal
 
 import numpy as np
 
-from prg.errors import UsageError
+from prg.errors import SettingsError, UsageError
 
 JoinMode = Literal["first", "retrace"]
 _JOIN_MODES = ("first", "retrace")
 _TINY = 1e-12
+
+
+_POSITIVE = ("delta", "alpha_max")  # ConnectionSettings fields checked by _check_positive
+_WEIGHTS = ("theta_o", "theta_a", "theta_f", "theta_p", "home_radius")  # by _check_weight
+
+
+def _as_float(value) -> float | None:
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return None
+
+
+def _check_positive(value, name: str) -> float:
+    v = _as_float(value)
+    if v is None or not (math.isfinite(v) and v > 0):
+        raise SettingsError(name, f"must be a positive finite number, got {value!r}")
+    return v
+
+
+def _check_weight(value, name: str) -> float:
+    v = _as_float(value)
+    if v is None or not (math.isfinite(v) and v >= 0):
+        raise SettingsError(name, f"must be a non-negative finite number, got {value!r}")
+    return v
+
+
+def _check_count(value, name: str) -> int:
+    try:
+        ok = not isinstance(value, bool) and int(value) == value and value >= 0
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
+        raise SettingsError(name, f"must be a non-negative integer, got {value!r}")
+    return int(value)
 
 
 @dataclass(frozen=True)
@@ -136,6 +171,9 @@ class ConnectionSettings:
     rounded joins (median path 1.03 times the straight distance; the p90 of the total turning of
     a connection is about 190 degrees, i.e. at most a hook or a loop). Smaller ``theta_f`` or
     larger ``theta_a`` make wider detours (``theta_f = 1``: p90 path 3.4 times the distance).
+
+    A refused value raises :class:`~prg.errors.SettingsError` naming its field; the lengths and
+    weights are stored as ``float``, ``max_steps`` as ``int``.
     """
 
     delta: float = 0.05
@@ -147,6 +185,21 @@ class ConnectionSettings:
     home_radius: float = 0.4
     max_steps: int = 400
     join: JoinMode = "first"
+
+    def __post_init__(self) -> None:
+        checked = {name: _check_positive(getattr(self, name), name) for name in _POSITIVE}
+        if checked["alpha_max"] > math.pi:
+            raise SettingsError(
+                "alpha_max", f"must be in (0, pi] radians, got {checked['alpha_max']!r}"
+            )
+        checked.update({name: _check_weight(getattr(self, name), name) for name in _WEIGHTS})
+        checked["max_steps"] = _check_count(self.max_steps, "max_steps")
+        if self.join not in _JOIN_MODES:
+            raise SettingsError(
+                "join", f"must be one of {', '.join(_JOIN_MODES)}, got {self.join!r}"
+            )
+        for name, value in checked.items():
+            object.__setattr__(self, name, value)
 
     def as_kwargs(self) -> dict:
         """The parameters as keyword arguments of :func:`connect_letters`."""
@@ -188,20 +241,6 @@ def _check_points(points, name: str) -> np.ndarray:
     if not np.all(np.isfinite(arr)):
         raise UsageError(f"{name} contains NaN or infinite values")
     return arr
-
-
-def _check_positive(value, name: str) -> float:
-    v = float(value)
-    if not (math.isfinite(v) and v > 0):
-        raise UsageError(f"{name} must be a positive finite number, got {value!r}")
-    return v
-
-
-def _check_weight(value, name: str) -> float:
-    v = float(value)
-    if not (math.isfinite(v) and v >= 0):
-        raise UsageError(f"{name} must be a non-negative finite number, got {value!r}")
-    return v
 
 
 def subdivide(start: np.ndarray, end: np.ndarray, delta: float) -> np.ndarray:
@@ -313,24 +352,17 @@ def connect_letters(
     Raises
     ------
     UsageError
-        A malformed array or an out-of-range parameter, named.
+        A malformed array or an out-of-range parameter (:class:`~prg.errors.SettingsError`),
+        named.
     """
     prev = _check_points(prev, "prev")
     nxt = _check_points(nxt, "nxt")
-    delta = _check_positive(delta, "delta")
-    alpha_max = _check_positive(alpha_max, "alpha_max")
-    if alpha_max > math.pi:
-        raise UsageError(f"alpha_max must be in (0, pi] radians, got {alpha_max!r}")
-    theta_o = _check_weight(theta_o, "theta_o")
-    theta_a = _check_weight(theta_a, "theta_a")
-    theta_f = _check_weight(theta_f, "theta_f")
-    theta_p = _check_weight(theta_p, "theta_p")
-    home_radius = _check_weight(home_radius, "home_radius")
-    if isinstance(max_steps, bool) or int(max_steps) != max_steps or max_steps < 0:
-        raise UsageError(f"max_steps must be a non-negative integer, got {max_steps!r}")
-    max_steps = int(max_steps)
-    if join not in _JOIN_MODES:
-        raise UsageError(f"join must be one of {', '.join(_JOIN_MODES)}, got {join!r}")
+    # checked by ConnectionSettings, as floats (max_steps an int)
+    delta, alpha_max, theta_o, theta_a, theta_f, theta_p, home_radius, max_steps, join = astuple(
+        ConnectionSettings(
+            delta, alpha_max, theta_o, theta_a, theta_f, theta_p, home_radius, max_steps, join
+        )
+    )
 
     start, first = prev[-1], nxt[0]
     m = nxt.shape[0]

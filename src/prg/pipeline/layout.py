@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from prg.data.alphabet import unsupported_chars
-from prg.errors import UsageError
+from prg.errors import SettingsError, UsageError
 
 _EPS = 1e-9
 
@@ -72,6 +72,8 @@ class LayoutSettings:
         Lowercase letters of full height.
     descenders : str
         Letters whose tail goes below the baseline.
+
+    A refused value raises :class:`~prg.errors.SettingsError` naming its field.
     """
 
     letter_height: float = 1.5
@@ -87,11 +89,11 @@ class LayoutSettings:
         for name in ("letter_height", "x_height", "max_width"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
-                raise UsageError(f"layout {name} must be a positive number, got {value!r}")
+                raise SettingsError(name, f"must be a positive number, got {value!r}")
         for name in ("descender", "gap", "space_width"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
-                raise UsageError(f"layout {name} must be a non-negative number, got {value!r}")
+                raise SettingsError(name, f"must be a non-negative number, got {value!r}")
 
 
 def letter_band(char: str, params: LayoutSettings | None = None) -> tuple[float, float]:
@@ -116,7 +118,9 @@ def letter_band(char: str, params: LayoutSettings | None = None) -> tuple[float,
     return bottom, top
 
 
-def place_letter(points, char: str, left: float, params: LayoutSettings | None = None) -> np.ndarray:
+def place_letter(
+    points, char: str, left: float, params: LayoutSettings | None = None
+) -> np.ndarray:
     """Scale one normalised letter to its band and put its box's left edge at ``left``.
 
     Parameters

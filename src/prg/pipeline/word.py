@@ -26,6 +26,7 @@ import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 from xml.sax.saxutils import escape
 
 import numpy as np
@@ -34,6 +35,9 @@ from prg.errors import UsageError
 from prg.files import atomic_path
 from prg.pipeline.connect import ConnectionResult
 from prg.pipeline.layout import word_breaks
+
+if TYPE_CHECKING:  # the DMP module (scipy) is imported when a word has a DMP
+    from prg.pipeline.dmp import DMP
 
 SCHEMA = "prg.word_trajectory"
 SCHEMA_VERSION = 1
@@ -70,9 +74,10 @@ class WordTrajectory:
         ``"letter"``, ``"connection"`` or ``"space"`` per segment (module docstring).
     text : str
         The written text; its non-space characters are the letter segments, in order.
-    dmp : dict or None
-        The fitted DMP (``to_dict()`` of the DMP helper: weights, start, goal, tau, basis count),
-        stored as given (JSON-compatible values).
+    dmp : DMP or None
+        The DMP fitted to the whole path (:class:`prg.pipeline.dmp.DMP`); stored in the JSON
+        document as :meth:`DMP.to_dict <prg.pipeline.dmp.DMP.to_dict>` (weights, start, goal,
+        tau, basis ...).
     speed_cm_s : float
         Mean pen speed along the path (cm/s), from the writing config.
     duration_s : float, optional
@@ -83,7 +88,7 @@ class WordTrajectory:
     segment: np.ndarray
     segment_kinds: list[str]
     text: str
-    dmp: dict | None = None
+    dmp: DMP | None = None
     speed_cm_s: float = DEFAULT_SPEED_CM_S
     duration_s: float | None = field(default=None)
 
@@ -139,8 +144,11 @@ class WordTrajectory:
                 f"text {self.text!r} has {n_chars} characters but there are {n_letters} "
                 "letter segments"
             )
-        if self.dmp is not None and not isinstance(self.dmp, dict):
-            raise UsageError(f"dmp must be a dict or None, got {type(self.dmp).__name__}")
+        if self.dmp is not None:
+            from prg.pipeline.dmp import DMP
+
+            if not isinstance(self.dmp, DMP):
+                raise UsageError(f"dmp must be a DMP or None, got {type(self.dmp).__name__}")
         if not self._speed_ok():
             raise UsageError(f"speed_cm_s must be a positive number, got {self.speed_cm_s!r}")
         self.speed_cm_s = float(self.speed_cm_s)
@@ -190,7 +198,7 @@ class WordTrajectory:
             "segment_kinds": list(self.segment_kinds),
             "segment": [int(s) for s in self.segment],
             "points": [[float(x), float(y)] for x, y in self.points],
-            "dmp": _jsonable(self.dmp),
+            "dmp": None if self.dmp is None else self.dmp.to_dict(),
         }
 
     @classmethod
@@ -224,7 +232,7 @@ class WordTrajectory:
             segment=segment,
             segment_kinds=doc["segment_kinds"],
             text=doc["text"],
-            dmp=doc.get("dmp"),
+            dmp=_dmp_from_json(doc.get("dmp")),
             speed_cm_s=doc["speed_cm_s"],
             duration_s=doc["duration_s"],
         )
@@ -282,6 +290,14 @@ class WordTrajectory:
             out.append((kind, pts))
         return out
 
+    def _styled(self, highlight: bool) -> list[tuple[str, np.ndarray, tuple]]:
+        """:meth:`polylines` with the style each is drawn in: (colour, width fraction, dashes)."""
+        return [(k, pts, _STYLES[k] if highlight else _INK) for k, pts in self.polylines(highlight)]
+
+    def _corners(self, margin_cm: float) -> tuple[np.ndarray, np.ndarray]:
+        """Lower-left and upper-right corners of a drawing of the points with a margin (cm)."""
+        return self.points.min(axis=0) - margin_cm, self.points.max(axis=0) + margin_cm
+
     def to_svg(
         self,
         path: str | os.PathLike,
@@ -299,8 +315,7 @@ class WordTrajectory:
             a reader of the handwriting sees).
         pen_width_cm, margin_cm : float
         """
-        lo = self.points.min(axis=0) - margin_cm
-        hi = self.points.max(axis=0) + margin_cm
+        lo, hi = self._corners(margin_cm)
         w, h = hi - lo
         lines = [
             '<?xml version="1.0" encoding="UTF-8"?>',
@@ -309,8 +324,7 @@ class WordTrajectory:
             f"<title>{escape(self.text)}</title>",
             '<rect width="100%" height="100%" fill="#ffffff"/>',
         ]
-        for kind, pts in self.polylines(highlight):
-            colour, rel_width, dashes = _STYLES[kind] if highlight else _INK
+        for kind, pts, (colour, rel_width, dashes) in self._styled(highlight):
             coords = " ".join(f"{x - lo[0]:.5f},{hi[1] - y:.5f}" for x, y in pts)
             dash = ""
             if dashes:
@@ -348,16 +362,13 @@ class WordTrajectory:
         from prg.plotting import pyplot
 
         plt = pyplot()
-        margin = 0.3
-        lo = self.points.min(axis=0) - margin
-        hi = self.points.max(axis=0) + margin
+        lo, hi = self._corners(0.3)
         w_in, h_in = (hi - lo) / 2.54
         fig = plt.figure(figsize=(max(w_in, 0.5), max(h_in, 0.5)), dpi=dpi)
         try:
             ax = fig.add_axes((0, 0, 1, 1))
             lw = pen_width_cm / 2.54 * 72  # points
-            for kind, pts in self.polylines(highlight):
-                colour, rel_width, dashes = _STYLES[kind] if highlight else _INK
+            for kind, pts, (colour, rel_width, dashes) in self._styled(highlight):
                 ax.plot(
                     pts[:, 0],
                     pts[:, 1],
@@ -383,17 +394,18 @@ class WordTrajectory:
             plt.close(fig)
 
 
-def _jsonable(value):
-    """Numpy arrays and scalars inside ``value`` as plain JSON values."""
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _jsonable(value.tolist())
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
+def _dmp_from_json(value: Any) -> DMP | None:
+    """The ``dmp`` of a JSON document: None, or a DMP's ``to_dict()`` (validated)."""
+    if value is None:
+        return None
+    if not isinstance(value, dict):
+        raise UsageError(f"dmp must be a dict or None, got {type(value).__name__}")
+    from prg.pipeline.dmp import DMP
+
+    try:
+        return DMP.from_dict(value)
+    except UsageError as err:
+        raise UsageError(f"invalid DMP ({err})") from None
 
 
 def _atomic_write(path: Path, write: Callable[[Path], object]) -> Path:
@@ -409,7 +421,7 @@ def assemble_word(
     connections: Sequence[ConnectionResult | np.ndarray],
     text: str,
     speed_cm_s: float = DEFAULT_SPEED_CM_S,
-    dmp: dict | None = None,
+    dmp: DMP | None = None,
 ) -> WordTrajectory:
     """Concatenate laid-out letters and their connections into a :class:`WordTrajectory`.
 
@@ -426,7 +438,7 @@ def assemble_word(
     text : str
     speed_cm_s : float
         Writing speed; ``duration_s`` = path length / speed.
-    dmp : dict, optional
+    dmp : DMP, optional
 
     Returns
     -------

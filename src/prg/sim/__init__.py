@@ -1,5 +1,9 @@
 """The simulated writing robot: a 7-DOF arm in PyBullet writes a word on paper.
 
+``prg.sim.simulate_word(word, "panda")`` writes a :class:`~prg.pipeline.word.WordTrajectory`
+with the Panda and ``conf/simulate.yaml``'s settings (:class:`SimSettings`); a command builds its
+settings with :meth:`SimSettings.from_mapping` and :meth:`RobotSettings.from_dict`.
+
 Modules
 -------
 :mod:`prg.sim.geometry`
@@ -8,14 +12,23 @@ Modules
 :mod:`prg.sim.plan`
     The pen's timed waypoints: approach, lower, write (DMP timing), lift, travel, retreat.
 :mod:`prg.sim.robots`
-    Robot descriptions as data (``conf/robot/*.yaml``).
+    Robot descriptions as data (``conf/robot/*.yaml``, :meth:`RobotSettings.named`).
+:mod:`prg.sim.bullet`
+    What the scene and the IK share of PyBullet: the module, loading the arm, the pen's pose.
 :mod:`prg.sim.scene`
-    The PyBullet scene (one client id, no global state) and the IK solver.
+    The PyBullet scene (one client id, no global state) and its camera.
+:mod:`prg.sim.ik`
+    The IK solver: the pen vertical, on a kinematic copy of the arm in its own client.
+:mod:`prg.sim.workspace`
+    The reachable workspace on the paper; a word that does not fit is refused.
+:mod:`prg.sim.settings`
+    :class:`SimSettings` (``conf/simulate.yaml``'s defaults, :meth:`SimSettings.from_mapping`)
+    and :class:`ControlSettings`.
 :mod:`prg.sim.writing`
-    :func:`simulate_word`: workspace check, IK, position control, ink, metrics.
+    :func:`simulate_word`: place, check the workspace, plan and solve the IK, write, render.
 :mod:`prg.sim.ink`
     The ink as PNG, SVG and the paper's texture.
-:mod:`prg.sim.record`
+:mod:`prg.recording.simulation`
     The Rerun recording (URDF arm animated over ``sim_time``, pen path, ink, command).
 :mod:`prg.sim.words`
     Words from a Hershey font, without a model (tests, benchmark, a first try).
@@ -23,6 +36,7 @@ Modules
 
 from __future__ import annotations
 
+from prg.recording.simulation import record_simulation
 from prg.sim.geometry import (
     Paper,
     distance_to_polylines,
@@ -31,21 +45,15 @@ from prg.sim.geometry import (
     pen_down_samples,
     tracking_error,
 )
+from prg.sim.ik import IKSettings, IKSolver, UnreachableError
 from prg.sim.ink import ink_png, ink_svg
 from prg.sim.plan import MotionPlan, MotionSettings, plan_motion
-from prg.sim.record import record_simulation
 from prg.sim.robots import RobotSettings
-from prg.sim.scene import Camera, IKSettings, IKSolver, Scene, UnreachableError
+from prg.sim.scene import Camera, Scene
+from prg.sim.settings import ControlSettings, SimSettings
 from prg.sim.words import font_word
-from prg.sim.writing import (
-    ControlSettings,
-    ReachMap,
-    SimResult,
-    SimSettings,
-    check_workspace,
-    simulate_word,
-    word_samples,
-)
+from prg.sim.workspace import ReachMap, check_workspace
+from prg.sim.writing import SimResult, simulate_word, word_samples
 
 __all__ = [
     "Camera",

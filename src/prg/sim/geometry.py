@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from prg.errors import UsageError
+from prg.fields import FromMapping, as_float, check, positive_float, vector
 
 __all__ = [
     "Paper",
@@ -48,13 +49,13 @@ _Float = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
-class Paper:
-    """A sheet on the table: size and pose.
+class Paper(FromMapping):
+    """A sheet on the table: size and pose (the defaults are ``conf/simulate.yaml``'s).
 
     Attributes
     ----------
     size_cm : tuple of float
-        Width (along the paper's x, the writing line) and height, in cm.
+        Width (along the paper's x, the writing line) and height, in cm (A3 landscape).
     centre : tuple of float
         Centre of the top surface in the world (m).
     yaw_deg : float
@@ -64,22 +65,26 @@ class Paper:
         Thickness of the sheet (m); it lies on the table, its top surface at ``centre[2]``.
     """
 
-    size_cm: tuple[float, float] = (29.7, 21.0)
+    size_cm: tuple[float, float] = (42.0, 29.7)
     centre: tuple[float, float, float] = (0.55, 0.0, 0.6255)
     yaw_deg: float = -90.0
     thickness_m: float = 0.0005
 
     def __post_init__(self) -> None:
-        size = np.asarray(self.size_cm, dtype=np.float64)
-        if size.shape != (2,) or not np.all(np.isfinite(size)) or np.any(size <= 0):
-            raise UsageError(f"paper.size_cm must be two positive numbers, got {self.size_cm!r}")
-        centre = np.asarray(self.centre, dtype=np.float64)
-        if centre.shape != (3,) or not np.all(np.isfinite(centre)):
-            raise UsageError(f"paper.centre must be three numbers (m), got {self.centre!r}")
-        if not math.isfinite(self.yaw_deg):
-            raise UsageError(f"paper.yaw_deg must be a number, got {self.yaw_deg!r}")
-        if not (math.isfinite(self.thickness_m) and self.thickness_m > 0):
-            raise UsageError(f"paper.thickness_m must be positive, got {self.thickness_m!r}")
+        problem = "must be two positive numbers"
+        size = vector(self.size_cm, "size_cm", 2, problem)
+        check(min(size) > 0, "size_cm", f"{problem}, got {self.size_cm!r}")
+        centre = vector(self.centre, "centre", 3, "must be three numbers (m)")
+        yaw = as_float(self.yaw_deg, "yaw_deg")
+        check(math.isfinite(yaw), "yaw_deg", f"must be a number, got {yaw!r}")
+        thickness = positive_float(self.thickness_m, "thickness_m")
+        for name, value in (
+            ("size_cm", size),
+            ("centre", centre),
+            ("yaw_deg", yaw),
+            ("thickness_m", thickness),
+        ):
+            object.__setattr__(self, name, value)
 
     @property
     def rotation(self) -> _Float:

@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from prg.errors import UsageError
+from prg.fields import FromMapping, at_least, positive
 from prg.sim.geometry import min_jerk, runs
 
 __all__ = ["PHASES", "MotionPlan", "MotionSettings", "plan_motion"]
@@ -32,7 +33,7 @@ PHASES = ("approach", "lower", "dwell", "write", "lift", "travel", "retreat")
 
 
 @dataclass(frozen=True)
-class MotionSettings:
+class MotionSettings(FromMapping):
     """Durations and heights of the pen's moves around the writing.
 
     Attributes
@@ -54,12 +55,8 @@ class MotionSettings:
     dwell_s: float = 0.2
 
     def __post_init__(self) -> None:
-        for name in ("lift_cm", "approach_s", "lower_s", "lift_s"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise UsageError(f"motion.{name} must be a positive number, got {value!r}")
-        if not (math.isfinite(self.dwell_s) and self.dwell_s >= 0):
-            raise UsageError(f"motion.dwell_s must be >= 0, got {self.dwell_s!r}")
+        positive(self, "lift_cm", "approach_s", "lower_s", "lift_s", what="a positive number")
+        at_least(self, "dwell_s", 0.0)
 
 
 @dataclass(frozen=True)

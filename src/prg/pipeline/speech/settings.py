@@ -1,0 +1,85 @@
+"""How phi_S recognises speech: :class:`SpeechSettings`, and the back-ends and cases it accepts."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from prg.errors import UsageError
+
+BACKENDS = ("whisper", "wav2vec2", "pocketsphinx")
+CASES = ("lower", "upper", "title")
+
+
+def unknown_backend(backend: str) -> UsageError:
+    """The error for a back-end name that is not one of :data:`BACKENDS`."""
+    return UsageError(f"speech backend {backend!r} is unknown: accepted are {', '.join(BACKENDS)}")
+
+
+@dataclass(frozen=True)
+class SpeechSettings:
+    """How phi_S recognises speech.
+
+    Parameters
+    ----------
+    backend : {"whisper", "wav2vec2", "pocketsphinx"}
+    model : str or None
+        Backend model (folder or cached hub name); None for the backend's default.
+    lexicon : tuple of str or None
+        Closed list of words (or short phrases) the speaker may say; any sequence is accepted and
+        stored as a tuple. Entries must contain letters or digits.
+    rescore : bool
+        Choose the lexicon word the model scores highest instead of transcribing freely
+        (whisper, wav2vec2); needs a lexicon.
+    case : {"lower", "upper", "title"}
+        Case of the written word.
+    max_seconds : float
+        Longest accepted audio (Whisper sees 30 s at once).
+    min_rms_dbfs : float
+        Audio whose RMS level (dB relative to full scale 1.0) is below this is silent.
+    beam_size : int
+        Beam width of the whisper decoder.
+    language : str
+        Spoken language (whisper; English-only models ignore it).
+    """
+
+    backend: str = "whisper"
+    model: str | None = None
+    lexicon: tuple[str, ...] | None = None
+    rescore: bool = False
+    case: str = "lower"
+    max_seconds: float = 30.0
+    min_rms_dbfs: float = -50.0
+    beam_size: int = 5
+    language: str = "en"
+
+    def __post_init__(self) -> None:
+        if self.backend not in BACKENDS:
+            raise unknown_backend(self.backend)
+        if self.case not in CASES:
+            raise UsageError(f"case {self.case!r} is unknown: accepted are {', '.join(CASES)}")
+        if self.model is not None:
+            object.__setattr__(self, "model", str(self.model))
+        if not 0 < self.max_seconds < math.inf:
+            raise UsageError(f"max_seconds must be > 0 and finite, got {self.max_seconds}")
+        if not (isinstance(self.beam_size, int) and self.beam_size >= 1):
+            raise UsageError(f"beam_size must be an integer >= 1, got {self.beam_size!r}")
+        if self.lexicon is not None:
+            if isinstance(self.lexicon, str):
+                raise UsageError(
+                    f"lexicon must be a list of words, got the string {self.lexicon!r}"
+                )
+            words = tuple(" ".join(str(w).split()) for w in self.lexicon)
+            bad = [w for w in words if not any(c.isalnum() for c in w)]
+            if not words or bad:
+                raise UsageError(
+                    f"lexicon entries must contain letters or digits, got {list(self.lexicon)!r}"
+                )
+            object.__setattr__(self, "lexicon", tuple(dict.fromkeys(words)))
+        if self.rescore and self.lexicon is None:
+            raise UsageError("rescore=True needs a lexicon: the words to choose from")
+        if self.rescore and self.backend == "pocketsphinx":
+            raise UsageError(
+                "rescore is for whisper and wav2vec2; pocketsphinx with a lexicon already "
+                "decodes a closed vocabulary (its grammar)"
+            )
