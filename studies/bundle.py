@@ -3,6 +3,7 @@
 :func:`build_study` (behind ``prg-study build``) writes ``studies/<name>/build/``::
 
     index.html, study.js, study.css   the questionnaire (dependency-free; runs from file://)
+    common.js, common.css             what the questionnaire and the capture page share
     config.js / config.json           page settings: columns, completion code and URL, saving
     trials.js / trials.json           one counterbalanced row per participant, with ground truth
     trials.csv                        the same, one line per stimulus shown (long format)
@@ -25,6 +26,7 @@ import hashlib
 import io
 import json
 import shutil
+import string
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
@@ -32,8 +34,10 @@ from pathlib import Path
 
 import prg
 from prg.files import staged_folder
-from studies.design import ROBOT, Row, StudySettings, balance_notes, design_rows
+from studies.design import Row, balance_notes, design_rows
+from studies.design_config import StudySettings
 from studies.stimuli import (
+    ROBOT,
     HumanSamples,
     RenderStyle,
     Sample,
@@ -58,11 +62,24 @@ except ImportError:  # the analysis package is not there: the columns it documen
 
 #: Recorded after the analysis columns: Prolific's STUDY_ID (the analysis ignores it).
 EXTRA_COLUMNS: tuple[str, ...] = ("study_id",)
-STUDY_ASSETS = {"study.html": "index.html", "study.js": "study.js", "study.css": "study.css"}
-CAPTURE_ASSETS = {
-    "capture.html": "index.html",
-    "capture.js": "capture.js",
-    "capture.css": "capture.css",
+#: What both pages load first (each page's folder gets its copy: capture/ is hosted on its own too).
+COMMON_ASSETS = {"common.js": "common.js", "common.css": "common.css"}
+STUDY_ASSETS = {**COMMON_ASSETS, "study.js": "study.js", "study.css": "study.css"}
+CAPTURE_ASSETS = {**COMMON_ASSETS, "capture.js": "capture.js", "capture.css": "capture.css"}
+#: The two pages' ``index.html``, from one skeleton (``web/page.html``): what differs.
+PAGES = {
+    "study": {
+        "title": "Handwriting study",
+        "viewport": "width=device-width, initial-scale=1",
+        "noun": "study",
+        "data": ("config.js", "trials.js"),
+    },
+    "capture": {
+        "title": "Handwriting recording",
+        "viewport": "width=device-width, initial-scale=1, user-scalable=no",
+        "noun": "page",
+        "data": ("config.js",),
+    },
 }
 
 
@@ -103,6 +120,21 @@ class BuildReport:
 def web_asset(name: str) -> bytes:
     """A file of ``studies/web/``."""
     return resources.files("studies").joinpath("web", name).read_bytes()
+
+
+def page_html(page: str) -> bytes:
+    """The ``index.html`` of ``page`` (``study`` or ``capture``): the skeleton with its title,
+    viewport, stylesheet and scripts (the data scripts first, then ``common.js``, then its own)."""
+    fields = PAGES[page]
+    data = "".join(f'<script src="{name}"></script>\n' for name in fields["data"])
+    skeleton = string.Template(web_asset("page.html").decode("utf-8"))
+    return skeleton.substitute(
+        page=page,
+        title=fields["title"],
+        viewport=fields["viewport"],
+        noun=fields["noun"],
+        data=data,
+    ).encode("utf-8")
 
 
 def js_assignment(variable: str, value) -> str:
@@ -324,8 +356,10 @@ def _build_into(
     (root / "trials.csv").write_text(trial_table(rows, files), encoding="utf-8")
 
     # pages
-    assets = {dst: web_asset(src) for src, dst in STUDY_ASSETS.items()}
-    capture_assets = {dst: web_asset(src) for src, dst in CAPTURE_ASSETS.items()}
+    assets = {"index.html": page_html("study")}
+    assets |= {dst: web_asset(src) for src, dst in STUDY_ASSETS.items()}
+    capture_assets = {"index.html": page_html("capture")}
+    capture_assets |= {dst: web_asset(src) for src, dst in CAPTURE_ASSETS.items()}
     digest = _hash(
         json.dumps(trials, sort_keys=True).encode(),
         json.dumps(_page_config(config, "", ready, missing, pilot), sort_keys=True).encode(),

@@ -39,8 +39,8 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 from prg.errors import UsageError
-from studies.design import ROBOT
 
+ROBOT = "robot"  #: the writer id of robot samples (studies.design's trials use it too)
 CAPTURE_SCHEMA = "prg.handwriting_capture"
 CAPTURE_VERSION = 1
 WORD_SCHEMA = "prg.word_trajectory"

@@ -44,6 +44,7 @@ INK: RGB = (20, 20, 20)
 FIGURE_INK: RGB = (0, 0, 0)
 CONNECTION: RGB = (214, 39, 40)  # matplotlib's tab:red
 PEN_UP: RGB = (150, 150, 150)
+SPACE: RGB = (158, 158, 158)  # the dashed pen-up move over a space in word figures
 TARGET: RGB = (190, 190, 190)
 COMMANDED: RGB = (120, 170, 255)
 PEN: RGB = (31, 119, 180)  # matplotlib's tab:blue

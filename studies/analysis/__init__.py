@@ -5,9 +5,11 @@ Modules:
 - :mod:`~studies.analysis.schema` — the response file's exact columns (no heavy imports);
 - :mod:`~studies.analysis.validate` — read and check a responses CSV, attention checks;
 - :mod:`~studies.analysis.config` — analysis options from the study YAML and the command line;
-- :mod:`~studies.analysis.stats` — paper-faithful and recommended tests (tidy frames in and out);
+- :mod:`~studies.analysis.stats` — paper-faithful and recommended tests (tidy frames in and out),
+  one module per family of tests;
 - :mod:`~studies.analysis.analyze` — every test of a study, conclusions and verdicts;
 - :mod:`~studies.analysis.report` — Markdown/HTML report, figures, CSVs (atomic);
+- :mod:`~studies.analysis.crossed_logit` — the crossed logit model of the answers, calibrated;
 - :mod:`~studies.analysis.power` — power and sample size for both studies;
 - :mod:`~studies.analysis.simulate` — simulated participants with known truth;
 - :mod:`~studies.analysis.paper` — the paper's numbers reproduced from its summaries;

@@ -24,6 +24,8 @@ from prg.errors import UsageError
 from studies.analysis import stats as S
 from studies.analysis.config import AnalysisSettings
 from studies.analysis.schema import READABILITY, TURING
+from studies.analysis.stats import format_p
+from studies.analysis.stats.common import decision, result_frame
 from studies.analysis.validate import (
     Responses,
     analysis_rows,
@@ -84,12 +86,84 @@ def _ok(row: pd.Series | None) -> bool:
     return row is not None and np.isfinite(row["p_value"])
 
 
+def _rejected(row: pd.Series | None) -> bool:
+    """The test ``row`` was run and rejected its null hypothesis."""
+    return bool(_ok(row) and row["reject"])
+
+
+def _ci_bounds(row: pd.Series) -> list[float]:
+    return [float(row["ci_low"]), float(row["ci_high"])]
+
+
 def _ci(row: pd.Series, digits: int = 3) -> str:
     return f"{row['estimate']:.{digits}f} (95 % CI {row['ci_low']:.{digits}f} to {row['ci_high']:.{digits}f})"
 
 
-def _p(p: float) -> str:
-    return "p = n/a" if not np.isfinite(p) else (f"p = {p:.2g}" if p < 0.001 else f"p = {p:.3f}")
+def _mixed_test(
+    data: pd.DataFrame, a: float, z: float, shown: str, not_shown: str, **fields
+) -> pd.DataFrame:
+    """A result row for a term of the crossed mixed logit: the two-sided normal test of its
+    posterior ``z`` (``shown`` or ``not_shown`` in the conclusion, with the p value)."""
+    from scipy import stats as st
+
+    p = float(2 * st.norm.sf(abs(z)))
+    return result_frame(
+        n=len(data),
+        clusters=data["participant_id"].nunique(),
+        ci_level=1 - a,
+        statistic=z,
+        alpha=a,
+        **decision(p, a, shown, not_shown),
+        **fields,
+    )
+
+
+def _mixed_term(
+    data: pd.DataFrame, cfg: AnalysisSettings, outcome: str, fixed: str, term: int
+) -> tuple[pd.DataFrame, pd.Series | None]:
+    """The crossed mixed logit of ``outcome`` on ``fixed`` (an empty frame when ``cfg`` turns it
+    off) and its row ``term`` (0: the intercept), None unless the fit succeeded and has that row."""
+    if not cfg.mixed_model:
+        return pd.DataFrame(), None
+    mixed = S.mixed_logit(data, outcome, "participant_id", "word", fixed, cfg.alpha)
+    fitted = len(mixed) > term and mixed["status"].iloc[0].startswith(("ok", "converged"))
+    return mixed, mixed.iloc[term] if fitted else None
+
+
+def _study_analysis(
+    kind: str,
+    cfg: AnalysisSettings,
+    data: pd.DataFrame,
+    tests: pd.DataFrame,
+    mixed: pd.DataFrame,
+    tables: tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame],
+    candidates: dict[str, float],
+    judged: tuple[dict, list[str], list[str]],
+) -> StudyAnalysis:
+    """A study's results: ``tables`` (per word, per participant, ICC) get a ``study`` column
+    first; the margin's warnings weigh it against ``candidates`` (quantities of the data it may
+    have been taken from); ``judged`` is the study's (verdict, conclusions, contrasts)."""
+    for table in tables:
+        table.insert(0, "study", kind)
+    per_word, per_part, icc = tables
+    margin = cfg.margin_for(kind)
+    warnings = S.margin_warnings(margin, cfg.margin_source, candidates)
+    verdict, conclusions, contrasts = judged
+    return StudyAnalysis(
+        kind,
+        margin,
+        cfg,
+        data,
+        tests,
+        per_word,
+        per_part,
+        mixed,
+        icc,
+        conclusions,
+        verdict,
+        warnings,
+        contrasts,
+    )
 
 
 def analyze_turing(data: pd.DataFrame, cfg: AnalysisSettings) -> StudyAnalysis:
@@ -106,26 +180,21 @@ def analyze_turing(data: pd.DataFrame, cfg: AnalysisSettings) -> StudyAnalysis:
     neutral = cfg.neutral
     h1, h2 = "H1: indistinguishable from chance", "H2: confidence not high"
     parts = [
-        _tag(S.binomial_test(data, "chose_robot", c, "greater", a), TURING, PAPER, h1),
-        _tag(S.binomial_tost(data, "chose_robot", c, margin, a), TURING, PAPER, h1),
-        _tag(S.one_sample_ttest(data, "confidence", neutral, "greater", a), TURING, PAPER, h2),
-        _tag(
-            S.gee_rate(data, "chose_robot", "participant_id", c, margin, a), TURING, RECOMMENDED, h1
-        ),
-        _tag(
-            S.one_sample_ttest(
-                data, "confidence", neutral, "two-sided", a, cluster="participant_id"
+        _tag(frame, TURING, approach, hypothesis)
+        for approach, hypothesis, frame in (
+            (PAPER, h1, S.binomial_test(data, "chose_robot", c, "greater", a)),
+            (PAPER, h1, S.binomial_tost(data, "chose_robot", c, margin, a)),
+            (PAPER, h2, S.one_sample_ttest(data, "confidence", neutral, "greater", a)),
+            (RECOMMENDED, h1, S.gee_rate(data, "chose_robot", "participant_id", c, margin, a)),
+            (
+                RECOMMENDED,
+                h2,
+                S.one_sample_ttest(
+                    data, "confidence", neutral, "two-sided", a, cluster="participant_id"
+                ),
             ),
-            TURING,
-            RECOMMENDED,
-            h2,
-        ),
-        _tag(
-            S.signed_rank_test(data, "confidence", neutral, "participant_id", a),
-            TURING,
-            RECOMMENDED,
-            h2,
-        ),
+            (RECOMMENDED, h2, S.signed_rank_test(data, "confidence", neutral, "participant_id", a)),
+        )
     ]
     # cluster-level check on H1: participants' rates, one value each
     rates = S.rates_by(data, "chose_robot", "participant_id", a)
@@ -140,84 +209,40 @@ def analyze_turing(data: pd.DataFrame, cfg: AnalysisSettings) -> StudyAnalysis:
             h1,
         )
     )
-    mixed = (
-        S.mixed_logit(data, "chose_robot", "participant_id", "word", "1", a)
-        if cfg.mixed_model
-        else pd.DataFrame()
-    )
-    if len(mixed) and mixed["status"].iloc[0].startswith(("ok", "converged")):
-        icept = mixed.iloc[0]
-        off = S.logit(c)
-        z = (icept.post_mean - off) / icept.post_sd
-        from scipy import stats as st
-
-        p = float(2 * st.norm.sf(abs(z)))
-        parts.append(
-            _tag(
-                S.tests_frame(
-                    [
-                        dict(
-                            test="crossed mixed logit vs chance (typical participant and word)",
-                            null_hypothesis=f"rate = {c:g}",
-                            n=len(data),
-                            clusters=data["participant_id"].nunique(),
-                            estimate=icept.rate,
-                            ci_low=icept.rate_low,
-                            ci_high=icept.rate_high,
-                            ci_level=1 - a,
-                            statistic=z,
-                            p_value=p,
-                            alpha=a,
-                            reject=p < a,
-                            conclusion=(
-                                f"{'above' if z > 0 else 'below'} chance ({_p(p)})"
-                                if p < a
-                                else f"not shown to differ from chance ({_p(p)})"
-                            ),
-                            method="BinomialBayesMixedGLM.fit_vb, random intercepts for participants and words; "
-                            "approximate posterior (variational Bayes); conditional, not population-average, rate",
-                        )
-                    ]
-                ),
-                TURING,
-                RECOMMENDED,
-                h1,
-            )
+    mixed, icept = _mixed_term(data, cfg, "chose_robot", "1", term=0)
+    if icept is not None:
+        z = (icept.post_mean - S.logit(c)) / icept.post_sd
+        test = _mixed_test(
+            data,
+            a,
+            z,
+            shown=f"{'above' if z > 0 else 'below'} chance",
+            not_shown="not shown to differ from chance",
+            test="crossed mixed logit vs chance (typical participant and word)",
+            null_hypothesis=f"rate = {c:g}",
+            estimate=icept.rate,
+            ci_low=icept.rate_low,
+            ci_high=icept.rate_high,
+            method="BinomialBayesMixedGLM.fit_vb, random intercepts for participants and words; "
+            "approximate posterior (variational Bayes); conditional, not population-average, rate",
         )
+        parts.append(_tag(test, TURING, RECOMMENDED, h1))
     tests = pd.concat(parts, ignore_index=True)
 
     per_word = S.rates_by(data, "chose_robot", "word", a, chance=c)
     conf_w = data.groupby("word")["confidence"].mean().rename("mean_confidence")
     per_word = per_word.merge(conf_w, on="word", how="left")
-    per_word.insert(0, "study", TURING)
     conf_p = data.groupby("participant_id")["confidence"].agg(
         mean_confidence="mean", sd_confidence="std"
     )
     per_part = rates.merge(conf_p, on="participant_id", how="left")
-    per_part.insert(0, "study", TURING)
     icc = pd.concat(
         [S.icc_oneway(data, "chose_robot"), S.icc_oneway(data, "confidence")], ignore_index=True
     )
-    icc.insert(0, "study", TURING)
-
-    warnings = S.margin_warnings(
-        margin, cfg.margin_source, S.margin_candidates(data, "chose_robot", "word", a)
-    )
-    verdict, conclusions, contrasts = _turing_verdict(tests, c, margin, neutral, a)
-    return StudyAnalysis(
-        TURING,
-        margin,
-        cfg,
-        data,
-        tests,
-        per_word,
-        per_part,
-        mixed,
-        icc,
-        conclusions,
-        verdict,
-        warnings,
-        contrasts,
+    candidates = S.margin_candidates(data, "chose_robot", "word", a)
+    judged = _turing_verdict(tests, c, margin, neutral, a)
+    return _study_analysis(
+        TURING, cfg, data, tests, mixed, (per_word, per_part, icc), candidates, judged
     )
 
 
@@ -232,7 +257,7 @@ def _turing_verdict(tests: pd.DataFrame, c: float, margin: float, neutral: float
         est = float(primary["estimate"])
         above = bool(primary["reject"] and est > c)
         below = bool(primary["reject"] and est < c)
-        equiv = bool(_ok(gee_tost) and gee_tost["reject"]) if primary is gee else False
+        equiv = _rejected(gee_tost) if primary is gee else False
         if equiv and not (above or below):
             h1 = "equivalent to chance"
         elif equiv:
@@ -249,17 +274,17 @@ def _turing_verdict(tests: pd.DataFrame, c: float, margin: float, neutral: float
             above_chance=above,
             below_chance=below,
             rate=est,
-            rate_ci=[float(primary["ci_low"]), float(primary["ci_high"])],
+            rate_ci=_ci_bounds(primary),
             h1_primary=primary["test"],
         )
         how = "GEE on participants" if primary is gee else "participant rates"
         text = {
             "equivalent to chance": f"**H1 supported**: participants picked the robot's sample at {_ci(primary)}, "
-            f"equivalent to chance {c:g} within ±{margin:g} ({how}; TOST {_p(gee_tost['p_value']) if _ok(gee_tost) else ''}).",
+            f"equivalent to chance {c:g} within ±{margin:g} ({how}; TOST {format_p(gee_tost['p_value']) if _ok(gee_tost) else ''}).",
             "above chance": f"**H1 not supported**: participants picked the robot's sample at {_ci(primary)}, "
-            f"above chance {c:g} ({how}, {_p(primary['p_value'])}): they can tell the robot's writing apart.",
+            f"above chance {c:g} ({how}, {format_p(primary['p_value'])}): they can tell the robot's writing apart.",
             "below chance": f"**H1 not supported as stated**: participants picked the robot's sample at {_ci(primary)}, "
-            f"*below* chance {c:g} ({how}, {_p(primary['p_value'])}): they took the robot's writing for a human's more often than a human's.",
+            f"*below* chance {c:g} ({how}, {format_p(primary['p_value'])}): they took the robot's writing for a human's more often than a human's.",
             "inconclusive": f"**H1 undecided**: the rate of picking the robot's sample, {_ci(primary)}, neither differs "
             f"from chance {c:g} nor is shown equivalent within ±{margin:g} ({how}); more data are needed.",
         }.get(h1, f"**H1**: {h1}: rate {_ci(primary)} ({how}).")
@@ -272,9 +297,9 @@ def _turing_verdict(tests: pd.DataFrame, c: float, margin: float, neutral: float
         ):
             contrasts.append(
                 f"The exact binomial TOST that treats all trials as independent "
-                f"{'shows' if paper_tost['reject'] else 'does not show'} equivalence ({_p(paper_tost['p_value'])}); "
+                f"{'shows' if paper_tost['reject'] else 'does not show'} equivalence ({format_p(paper_tost['p_value'])}); "
                 f"allowing for participants (GEE) it {'does' if gee_tost['reject'] else 'does not'} "
-                f"({_p(gee_tost['p_value'])})."
+                f"({format_p(gee_tost['p_value'])})."
             )
     else:
         why = _reasons(gee, fallback)
@@ -293,14 +318,12 @@ def _turing_verdict(tests: pd.DataFrame, c: float, margin: float, neutral: float
             h2 = "above neutral" if m > neutral else "below neutral"
         else:
             h2 = "not different from neutral"
-        verdict.update(
-            h2=h2, confidence_mean=m, confidence_ci=[float(h2p["ci_low"]), float(h2p["ci_high"])]
-        )
+        verdict.update(h2=h2, confidence_mean=m, confidence_ci=_ci_bounds(h2p))
         lines.append(
             {
-                "above neutral": f"**H2 not supported**: mean confidence (participant means) {_ci(h2p, 2)} is above neutral {neutral:g} ({_p(h2p['p_value'])}).",
-                "below neutral": f"**H2 supported**: mean confidence (participant means) {_ci(h2p, 2)} is below neutral {neutral:g} ({_p(h2p['p_value'])}).",
-                "not different from neutral": f"**H2 undecided**: mean confidence (participant means) {_ci(h2p, 2)} is not shown to differ from neutral {neutral:g} ({_p(h2p['p_value'])}).",
+                "above neutral": f"**H2 not supported**: mean confidence (participant means) {_ci(h2p, 2)} is above neutral {neutral:g} ({format_p(h2p['p_value'])}).",
+                "below neutral": f"**H2 supported**: mean confidence (participant means) {_ci(h2p, 2)} is below neutral {neutral:g} ({format_p(h2p['p_value'])}).",
+                "not different from neutral": f"**H2 undecided**: mean confidence (participant means) {_ci(h2p, 2)} is not shown to differ from neutral {neutral:g} ({format_p(h2p['p_value'])}).",
             }[h2]
         )
         paper_h2 = _row(tests, f"one-sample t-test vs {neutral:g} on ratings")
@@ -308,9 +331,9 @@ def _turing_verdict(tests: pd.DataFrame, c: float, margin: float, neutral: float
             same = bool(paper_h2["reject"]) == bool(h2p["reject"] and m > neutral)
             if not same:
                 contrasts.append(
-                    f"The paper's H2 test on all ratings as independent gives {_p(paper_h2['p_value'])} "
+                    f"The paper's H2 test on all ratings as independent gives {format_p(paper_h2['p_value'])} "
                     f"(one-sided, 'mean <= {neutral:g}'); on participant means the evidence is "
-                    f"{_p(h2p['p_value'])} (two-sided): the conclusions differ."
+                    f"{format_p(h2p['p_value'])} (two-sided): the conclusions differ."
                 )
     else:
         why = _reasons(h2p)
@@ -353,82 +376,42 @@ def analyze_readability(data: pd.DataFrame, cfg: AnalysisSettings) -> StudyAnaly
     """
     a, margin = cfg.alpha, cfg.margin_for(READABILITY)
     hyp = "robot's words as readable as the human's"
+    levels = ("human", "robot")
     parts = [
-        _tag(
-            S.group_ttest(data, "correct", "writer", "word", ("human", "robot"), a),
-            READABILITY,
-            PAPER,
-            hyp,
-        ),
-        _tag(
-            S.paired_tests(
-                data, "correct", "writer", "participant_id", ("human", "robot"), margin, a
-            ),
-            READABILITY,
-            RECOMMENDED,
-            hyp,
-        ),
-        _tag(
-            S.gee_difference(
-                data, "correct", "writer", "participant_id", ("human", "robot"), margin, a
-            ),
-            READABILITY,
-            RECOMMENDED,
-            hyp,
-        ),
-        _tag(
-            S.paired_tests(data, "correct", "writer", "word", ("human", "robot"), margin, a),
-            READABILITY,
-            RECOMMENDED,
-            hyp,
-        ),
-    ]
-    mixed = (
-        S.mixed_logit(data, "correct", "participant_id", "word", "C(writer, Treatment('human'))", a)
-        if cfg.mixed_model
-        else pd.DataFrame()
-    )
-    if len(mixed) and mixed["status"].iloc[0].startswith(("ok", "converged")) and len(mixed) > 1:
-        eff = mixed.iloc[1]
-        z = eff.post_mean / eff.post_sd
-        from scipy import stats as st
-
-        p = float(2 * st.norm.sf(abs(z)))
-        parts.append(
-            _tag(
-                S.tests_frame(
-                    [
-                        dict(
-                            test="crossed mixed logit: writer effect (robot vs human, log-odds)",
-                            null_hypothesis="log-odds ratio = 0",
-                            n=len(data),
-                            clusters=data["participant_id"].nunique(),
-                            estimate=eff.post_mean,
-                            ci_low=eff.ci_low,
-                            ci_high=eff.ci_high,
-                            ci_level=1 - a,
-                            statistic=z,
-                            p_value=p,
-                            alpha=a,
-                            reject=p < a,
-                            conclusion=(
-                                f"robot {'more' if z > 0 else 'less'} readable ({_p(p)})"
-                                if p < a
-                                else f"difference not shown ({_p(p)})"
-                            ),
-                            method="BinomialBayesMixedGLM.fit_vb, random intercepts for participants and words; approximate posterior",
-                        )
-                    ]
-                ),
-                READABILITY,
+        _tag(frame, READABILITY, approach, hyp)
+        for approach, frame in (
+            (PAPER, S.group_ttest(data, "correct", "writer", "word", levels, a)),
+            (
                 RECOMMENDED,
-                hyp,
-            )
+                S.paired_tests(data, "correct", "writer", "participant_id", levels, margin, a),
+            ),
+            (
+                RECOMMENDED,
+                S.gee_difference(data, "correct", "writer", "participant_id", levels, margin, a),
+            ),
+            (RECOMMENDED, S.paired_tests(data, "correct", "writer", "word", levels, margin, a)),
         )
+    ]
+    mixed, eff = _mixed_term(data, cfg, "correct", "C(writer, Treatment('human'))", term=1)
+    if eff is not None:
+        z = eff.post_mean / eff.post_sd
+        test = _mixed_test(
+            data,
+            a,
+            z,
+            shown=f"robot {'more' if z > 0 else 'less'} readable",
+            not_shown="difference not shown",
+            test="crossed mixed logit: writer effect (robot vs human, log-odds)",
+            null_hypothesis="log-odds ratio = 0",
+            estimate=eff.post_mean,
+            ci_low=eff.ci_low,
+            ci_high=eff.ci_high,
+            method="BinomialBayesMixedGLM.fit_vb, random intercepts for participants and words; approximate posterior",
+        )
+        parts.append(_tag(test, READABILITY, RECOMMENDED, hyp))
     tests = pd.concat(parts, ignore_index=True)
 
     per_word = S.rates_by(data, "correct", ["word", "writer"], a)
-    per_word.insert(0, "study", READABILITY)
     pw = S.rates_by(data, "correct", ["participant_id", "writer"], a)
     wide = pw.pivot_table(index="participant_id", columns="writer", values=["n", "rate"])
     per_part = pd.DataFrame(index=wide.index)
@@ -444,34 +427,17 @@ def analyze_readability(data: pd.DataFrame, cfg: AnalysisSettings) -> StudyAnaly
         per_part = per_part.merge(
             data.groupby("participant_id")["list_id"].first(), on="participant_id", how="left"
         )
-    per_part.insert(0, "study", READABILITY)
     icc = S.icc_oneway(data, "correct")
-    icc.insert(0, "study", READABILITY)
     diff = _row(tests, "paired t-test by participant (robot - human)")
-    cands = {}
+    candidates = {}
     if _ok(diff):
-        cands = {
+        candidates = {
             "the CI half-width of the difference": float(diff["ci_high"] - diff["estimate"]),
             "the observed difference": abs(float(diff["estimate"])),
         }
-    warnings = S.margin_warnings(margin, cfg.margin_source, cands)
-    verdict, conclusions, contrasts = _readability_verdict(
-        tests, margin, a, S.rates_by(data, "correct", "writer", a)
-    )
-    return StudyAnalysis(
-        READABILITY,
-        margin,
-        cfg,
-        data,
-        tests,
-        per_word,
-        per_part,
-        mixed,
-        icc,
-        conclusions,
-        verdict,
-        warnings,
-        contrasts,
+    judged = _readability_verdict(tests, margin, a, S.rates_by(data, "correct", "writer", a))
+    return _study_analysis(
+        READABILITY, cfg, data, tests, mixed, (per_word, per_part, icc), candidates, judged
     )
 
 
@@ -506,8 +472,8 @@ def _readability_verdict(
             lines.append(f"**Readability**: not estimable from these data: {why}.{seen}")
             return verdict, lines, contrasts
     d = float(diff["estimate"])
-    equiv = bool(_ok(tost) and tost["reject"])
-    noninf = bool(_ok(ni) and ni["reject"])
+    equiv = _rejected(tost)
+    noninf = _rejected(ni)
     sig = bool(diff["reject"])
     if equiv:
         v = "equally readable"
@@ -523,30 +489,30 @@ def _readability_verdict(
         noninferior=noninf,
         different=sig,
         difference=d,
-        difference_ci=[float(diff["ci_low"]), float(diff["ci_high"])],
+        difference_ci=_ci_bounds(diff),
         primary=diff["test"],
     )
     head = f"robot minus human success rate {_ci(diff)} ({how})"
     lines.append(
         {
-            "equally readable": f"**Equally readable**: {head}; equivalence within ±{margin:g} shown (TOST {_p(tost['p_value'])}).",
-            "robot more readable": f"**The robot's words are more readable**: {head}, {_p(diff['p_value'])}.",
-            "robot less readable": f"**The robot's words are less readable**: {head}, {_p(diff['p_value'])}"
+            "equally readable": f"**Equally readable**: {head}; equivalence within ±{margin:g} shown (TOST {format_p(tost['p_value'])}).",
+            "robot more readable": f"**The robot's words are more readable**: {head}, {format_p(diff['p_value'])}.",
+            "robot less readable": f"**The robot's words are less readable**: {head}, {format_p(diff['p_value'])}"
             + (
-                f"; still non-inferior at −{margin:g} ({_p(ni['p_value'])})."
+                f"; still non-inferior at −{margin:g} ({format_p(ni['p_value'])})."
                 if noninf
                 else f"; non-inferiority at −{margin:g} not shown."
             ),
             "non-inferior": f"**Non-inferior, equivalence not shown**: {head}; the robot is not worse by {margin:g} or more "
-            f"(non-inferiority {_p(ni['p_value'])}), but equivalence within ±{margin:g} is not shown (TOST {_p(tost['p_value'])}).",
-            "inconclusive": f"**Undecided**: {head}; neither a difference ({_p(diff['p_value'])}), equivalence (TOST "
-            f"{_p(tost['p_value'])}) nor non-inferiority ({_p(ni['p_value'])}) is shown.",
+            f"(non-inferiority {format_p(ni['p_value'])}), but equivalence within ±{margin:g} is not shown (TOST {format_p(tost['p_value'])}).",
+            "inconclusive": f"**Undecided**: {head}; neither a difference ({format_p(diff['p_value'])}), equivalence (TOST "
+            f"{format_p(tost['p_value'])}) nor non-inferiority ({format_p(ni['p_value'])}) is shown.",
         }[v]
     )
     paper = _row(tests, "independent t-test on word rates (robot - human)")
     if _ok(paper) and not paper["reject"] and not equiv:
         contrasts.append(
-            f"The paper's independent t-test on word rates does not reject 'no difference' ({_p(paper['p_value'])}); "
+            f"The paper's independent t-test on word rates does not reject 'no difference' ({format_p(paper['p_value'])}); "
             f"read as the paper did, that would 'accept' equality, but equivalence within ±{margin:g} is not shown here."
         )
     return verdict, lines, contrasts

@@ -3,7 +3,8 @@
 The entry point (``studies/cli.py``) calls :func:`register` on its sub-parsers and then
 ``args.func(args)``; every handler returns an exit code and raises
 :class:`prg.errors.UsageError` for bad input (the entry point prints it as one line, exit 2).
-``python -m studies.analysis.commands ...`` is ``prg-study ...`` (the entry point's ``main``).
+``python -m studies.analysis.commands ...`` is ``prg-study ...`` (:func:`studies.program.main`
+with :func:`register`).
 
 Usage::
 
@@ -25,7 +26,9 @@ import contextlib
 import json
 import math
 import sys
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from prg.commands.cli import check_output
 from prg.errors import UsageError
@@ -36,56 +39,34 @@ MAX_SIMULATED_ROWS = 1_000_000  #: about 20 s and 100 MB of CSV
 MAX_SIMULATED_WORDS = 1_000
 
 
-def _rate(value: str) -> float:
-    try:
-        x = float(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{value!r} is not a number") from None
-    if not (math.isfinite(x) and 0 < x < 1):
-        raise argparse.ArgumentTypeError(f"{value} is outside (0, 1)")
-    return x
+def _checked(parse, what: str, ok, outside: str):
+    """An argparse ``type``: ``parse`` the text (else "is not {what}"), then check it with ``ok``
+    (else "{value} {outside}"; NaN and infinities fail every range below)."""
+
+    def check(value: str):
+        try:
+            x = parse(value)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{value!r} is not {what}") from None
+        if not ok(x):
+            raise argparse.ArgumentTypeError(f"{value} {outside}")
+        return x
+
+    return check
 
 
-def _difference(value: str) -> float:
-    try:
-        x = float(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{value!r} is not a number") from None
-    if not (math.isfinite(x) and -1 < x < 1):
-        raise argparse.ArgumentTypeError(f"{value} is outside (-1, 1) (a difference of rates)")
-    return x
-
-
-def _share(value: str) -> float:
-    try:
-        x = float(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{value!r} is not a number") from None
-    if not (math.isfinite(x) and 0 <= x <= 0.5):
-        raise argparse.ArgumentTypeError(
-            f"{value} is outside 0-0.5 (a share of the answers' variance)"
-        )
-    return x
-
-
-def _positive_int(value: str) -> int:
-    try:
-        x = int(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{value!r} is not a whole number") from None
-    if x < 1:
-        raise argparse.ArgumentTypeError(f"{value} must be at least 1")
-    return x
-
-
-def _count(value: str) -> int:
-    try:
-        x = int(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{value!r} is not a whole number") from None
-    if x < 0:
-        raise argparse.ArgumentTypeError(f"{value} must be 0 or more")
-    return x
+_rate = _checked(float, "a number", lambda x: 0 < x < 1, "is outside (0, 1)")
+_difference = _checked(
+    float, "a number", lambda x: -1 < x < 1, "is outside (-1, 1) (a difference of rates)"
+)
+_share = _checked(
+    float,
+    "a number",
+    lambda x: 0 <= x <= 0.5,
+    "is outside 0-0.5 (a share of the answers' variance)",
+)
+_positive_int = _checked(int, "a whole number", lambda x: x >= 1, "must be at least 1")
+_count = _checked(int, "a whole number", lambda x: x >= 0, "must be 0 or more")
 
 
 def _confidence(value: str) -> float:
@@ -97,8 +78,42 @@ def _confidence(value: str) -> float:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``analyze``, ``power`` and ``simulate`` sub-commands to ``subparsers``."""
-    a = subparsers.add_parser(
+    _add_analyze(subparsers)
+    _add_power(subparsers)
+    _add_simulate(subparsers)
+
+
+def _add_variance_shares(parser: argparse.ArgumentParser, icc: str, word_icc: str, **default):
+    """``--icc`` and ``--word-icc``: the participant and word shares of the answers' variance
+    (``icc``, ``word_icc``: the defaults as the help states them)."""
+    parser.add_argument(
+        "--icc",
+        type=_share,
+        help=f"participant share of the answers' variance (default {icc})",
+        **default,
+    )
+    parser.add_argument(
+        "--word-icc",
+        type=_share,
+        help=f"word share of the answers' variance (default {word_icc})",
+        **default,
+    )
+
+
+def _command(
+    subparsers: argparse._SubParsersAction, name: str, run: Callable[..., Any], **texts: str
+) -> argparse.ArgumentParser:
+    """The sub-command ``name`` (``help``, ``description`` in ``texts``), which runs ``run``."""
+    parser = subparsers.add_parser(name, **texts)
+    parser.set_defaults(func=run)
+    return parser
+
+
+def _add_analyze(subparsers: argparse._SubParsersAction) -> None:
+    a = _command(
+        subparsers,
         "analyze",
+        run_analyze,
         help="analyse a long-format responses CSV; write the report",
         description="Check and analyse a responses CSV; write report.md/.html, tidy CSVs and figures.",
     )
@@ -132,10 +147,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     a.add_argument("--no-mixed", action="store_true", help="skip the crossed mixed logit (faster)")
     a.add_argument("--no-paper", action="store_true", help="leave out the paper-reproduction table")
-    a.set_defaults(func=run_analyze)
 
-    p = subparsers.add_parser(
+
+def _add_power(subparsers: argparse._SubParsersAction) -> None:
+    p = _command(
+        subparsers,
         "power",
+        run_power,
         help="sample-size planner for either study",
         description="Power and sample size for the Turing-like test (equivalence to chance) or the "
         "readability study (paired TOST / non-inferiority).",
@@ -169,12 +187,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         nargs="+",
         help="words per participant (default 10 20 turing, 10 readability)",
     )
-    p.add_argument(
-        "--icc", type=_share, help="participant share of the answers' variance (default 0.10)"
-    )
-    p.add_argument(
-        "--word-icc", type=_share, help="word share of the answers' variance (default 0.005)"
-    )
+    _add_variance_shares(p, "0.10", "0.005")
     p.add_argument("--alpha", type=_rate, default=0.05)
     p.add_argument("--chance", type=_rate, default=0.2, help="turing: chance rate (default 0.2)")
     p.add_argument(
@@ -190,10 +203,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="readability: also print power at these sizes (default 30)",
     )
     p.add_argument("--out", metavar="CSV", help="write the plan as a CSV too")
-    p.set_defaults(func=run_power)
 
-    s = subparsers.add_parser(
+
+def _add_simulate(subparsers: argparse._SubParsersAction) -> None:
+    s = _command(
+        subparsers,
         "simulate",
+        run_simulate,
         help="simulated participants with known truth, as a responses CSV",
         description="Draw simulated participants from a crossed logit model with known truth; write "
         "a responses CSV in the exact schema and the truth as JSON next to it.",
@@ -211,18 +227,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         type=_rate,
         help="readability: the human's success rate (default: = --true-rate)",
     )
-    s.add_argument(
-        "--icc",
-        type=_share,
-        default=0.0,
-        help="participant share of the answers' variance (default 0)",
-    )
-    s.add_argument(
-        "--word-icc",
-        type=_share,
-        default=0.0,
-        help="word share of the answers' variance (default 0)",
-    )
+    _add_variance_shares(s, "0", "0", default=0.0)
     s.add_argument(
         "--words", help="comma-separated words, or a number of words (default: 10 words)"
     )
@@ -258,7 +263,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         metavar="CSV",
         help="responses CSV to write (truth: <name>.truth.json)",
     )
-    s.set_defaults(func=run_simulate)
 
 
 def run_analyze(args: argparse.Namespace) -> int:
@@ -509,7 +513,7 @@ def run_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
-if __name__ == "__main__":  # the same parser and error handling as the entry point
-    from studies.cli import main
+if __name__ == "__main__":  # the entry point's parser and error handling, with these commands
+    from studies.program import main
 
-    sys.exit(main())
+    sys.exit(main([register]))

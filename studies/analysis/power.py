@@ -16,7 +16,7 @@ participants removes.
 Study 2 (readability): power of the paired TOST (and non-inferiority test) on per-participant
 success-rate differences, robot minus human, each participant reading ``trials_per_writer``
 words per writer. The SD of the differences comes from the same crossed logit model the
-simulator uses (:mod:`studies.analysis.simulate`), and the TOST power is computed exactly for
+simulator uses (:mod:`studies.analysis.crossed_logit`), and the TOST power is computed exactly for
 normal differences by integrating over the sample SD (:func:`paired_tost_power`).
 """
 
@@ -30,7 +30,7 @@ import numpy as np
 import pandas as pd
 from scipy import integrate, special, stats
 
-from studies.analysis.simulate import _W, _Z, _intercept, latent_parameters
+from studies.analysis.crossed_logit import NODES, WEIGHTS, intercept, latent_parameters
 
 DEFAULT_ICC = 0.10
 DEFAULT_WORD_ICC = 0.005
@@ -217,12 +217,12 @@ def paired_difference_sd(
     w = words or 2 * m
     mean_rate = (human_rate + robot_rate) / 2
     _, su, sv = latent_parameters(mean_rate, icc, word_icc)
-    b_h, b_r = _intercept(human_rate, su, sv), _intercept(robot_rate, su, sv)
-    grid = su * _Z[:, None] + sv * _Z[None, :]
+    b_h, b_r = intercept(human_rate, su, sv), intercept(robot_rate, su, sv)
+    grid = su * NODES[:, None] + sv * NODES[None, :]
     p_h, p_r = special.expit(b_h + grid), special.expit(b_r + grid)
-    binom = float(_W @ (p_h * (1 - p_h) + p_r * (1 - p_r)) @ _W) / m
-    by_u = (p_r - p_h) @ _W
-    participant = float(_W @ (by_u - (robot_rate - human_rate)) ** 2)
+    binom = float(WEIGHTS @ (p_h * (1 - p_h) + p_r * (1 - p_r)) @ WEIGHTS) / m
+    by_u = (p_r - p_h) @ WEIGHTS
+    participant = float(WEIGHTS @ (by_u - (robot_rate - human_rate)) ** 2)
     word = 4 * word_icc * mean_rate * (1 - mean_rate) / w
     return math.sqrt(binom + participant + word)
 

@@ -211,6 +211,24 @@ def _png(fig) -> bytes:
     return buf.getvalue()
 
 
+def _label(ax, title: str, xlabel: str = "", ylabel: str = "", legend: bool = True, **where):
+    """Title and axis labels of a figure's panel, and its small frameless legend (``where``:
+    where it goes)."""
+    if xlabel:
+        ax.set_xlabel(xlabel)
+    if ylabel:
+        ax.set_ylabel(ylabel)
+    if legend:
+        ax.legend(frameon=False, fontsize=8, **where)
+    ax.set_title(title)
+
+
+def _participants_histogram(ax, values, bins) -> None:
+    """A histogram of one value per participant, its y axis counting participants."""
+    ax.hist(values, bins=bins, color="#8899cc", edgecolor="white")
+    ax.set_ylabel("participants")
+
+
 def fig_turing_words(
     per_word: pd.DataFrame, chance: float, margin: float, overall: tuple[float, float, float] | None
 ):
@@ -240,9 +258,12 @@ def fig_turing_words(
     )
     ax.set_yticks(y, pw["word"].astype(str))
     ax.set_xlim(0, 1)
-    ax.set_xlabel("rate of picking the robot's sample (95 % Wilson CI)")
-    ax.legend(loc="lower right", fontsize=8, frameon=False)
-    ax.set_title("Study 1: per-word detection rate against chance")
+    _label(
+        ax,
+        "Study 1: per-word detection rate against chance",
+        "rate of picking the robot's sample (95 % Wilson CI)",
+        loc="lower right",
+    )
     return fig
 
 
@@ -251,12 +272,13 @@ def fig_turing_participants(per_part: pd.DataFrame, chance: float):
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 3.0))
     bins = np.arange(-0.025, 1.026, 0.05)  # centred on multiples of 0.05 (rates of 10 or 20 trials)
-    ax.hist(per_part["rate"], bins=bins, color="#8899cc", edgecolor="white")
+    _participants_histogram(ax, per_part["rate"], bins)
     ax.axvline(chance, color="#2a7f2a", lw=1.2, label=f"chance {chance:g}")
-    ax.set_xlabel("participant's rate of picking the robot's sample")
-    ax.set_ylabel("participants")
-    ax.legend(frameon=False, fontsize=8)
-    ax.set_title("Study 1: participants' detection rates")
+    _label(
+        ax,
+        "Study 1: participants' detection rates",
+        "participant's rate of picking the robot's sample",
+    )
     return fig
 
 
@@ -277,19 +299,14 @@ def fig_confidence(data: pd.DataFrame, neutral: float):
         )
         a1.bar(levels + shift, counts.to_numpy(), width=width, label=label, color=color)
     a1.set_xticks(levels, ["very\nlow", "low", "neutral", "high", "very\nhigh"])
-    a1.set_ylabel("ratings")
-    a1.legend(frameon=False, fontsize=8)
-    a1.set_title("Confidence ratings")
+    _label(a1, "Confidence ratings", ylabel="ratings")
     means = data.groupby("participant_id")["confidence"].mean()
-    a2.hist(means, bins=np.linspace(1, 5, 17), color="#8899cc", edgecolor="white")
+    _participants_histogram(a2, means, np.linspace(1, 5, 17))
     a2.axvline(neutral, color="black", lw=1.2, label=f"neutral {neutral:g}")
     a2.axvline(
         means.mean(), color="#33338f", ls="--", lw=1.2, label=f"mean of means {means.mean():.2f}"
     )
-    a2.set_xlabel("participant's mean confidence")
-    a2.set_ylabel("participants")
-    a2.legend(frameon=False, fontsize=8)
-    a2.set_title("One value per participant")
+    _label(a2, "One value per participant", "participant's mean confidence")
     fig.tight_layout()
     return fig
 
@@ -322,8 +339,12 @@ def fig_readability(per_word: pd.DataFrame, data: pd.DataFrame):
     a1.set_xticks([0, 1], ["human", "robot"])
     a1.set_xlim(-0.5, 1.7)
     a1.set_ylim(-0.02, 1.02)
-    a1.set_ylabel("success rate (95 % Wilson CI; dots: participants)")
-    a1.set_title("Readability per writer")
+    _label(
+        a1,
+        "Readability per writer",
+        ylabel="success rate (95 % Wilson CI; dots: participants)",
+        legend=False,
+    )
     wide = per_word.pivot_table(index="word", columns="writer", values="rate")
     wide = wide.sort_values(wide.columns[0]) if len(wide.columns) else wide
     x = np.arange(len(wide))
@@ -334,9 +355,7 @@ def fig_readability(per_word: pd.DataFrame, data: pd.DataFrame):
         a2.vlines(x, wide["human"], wide["robot"], color="#999999", lw=1)
     a2.set_xticks(x, wide.index.astype(str), rotation=45, ha="right")
     a2.set_ylim(-0.02, 1.02)
-    a2.set_ylabel("success rate")
-    a2.legend(frameon=False, fontsize=8)
-    a2.set_title("Per word: the same word in both writings")
+    _label(a2, "Per word: the same word in both writings", ylabel="success rate")
     fig.tight_layout()
     return fig
 
@@ -347,7 +366,7 @@ def fig_differences(per_part: pd.DataFrame, margin: float, diff: tuple[float, fl
     fig, ax = plt.subplots(figsize=(6.4, 3.0))
     d = per_part["difference"].dropna() if "difference" in per_part else pd.Series(dtype=float)
     ax.axvspan(-margin, margin, color="#cfe8cf", label=f"equivalence band ±{margin:g}")
-    ax.hist(d, bins=np.arange(-1.05, 1.06, 0.1), color="#8899cc", edgecolor="white")
+    _participants_histogram(ax, d, np.arange(-1.05, 1.06, 0.1))
     ax.axvline(0, color="black", lw=0.8)
     if diff is not None:
         est, lo, hi = diff
@@ -355,10 +374,7 @@ def fig_differences(per_part: pd.DataFrame, margin: float, diff: tuple[float, fl
             lo, hi, color="#33338f", alpha=0.25, zorder=3, label="90 % CI of the mean (TOST)"
         )
         ax.axvline(est, color="#33338f", lw=1.8, zorder=4, label=f"mean difference {est:+.3f}")
-    ax.set_xlabel("participant's success rate: robot minus human")
-    ax.set_ylabel("participants")
-    ax.legend(frameon=False, fontsize=8)
-    ax.set_title("Study 2: paired differences")
+    _label(ax, "Study 2: paired differences", "participant's success rate: robot minus human")
     return fig
 
 
@@ -368,6 +384,14 @@ def fig_differences(per_part: pd.DataFrame, margin: float, diff: tuple[float, fl
 def _row(tests: pd.DataFrame, name: str):
     hit = tests[tests["test"] == name]
     return hit.iloc[0] if len(hit) else None
+
+
+def _interval(tests: pd.DataFrame, name: str) -> tuple[float, float, float] | None:
+    """(estimate, ci_low, ci_high) of the test ``name``; None when it is missing or not estimated."""
+    row = _row(tests, name)
+    if row is None or not np.isfinite(row.estimate):
+        return None
+    return row.estimate, row.ci_low, row.ci_high
 
 
 def _study1_section(doc: Doc, st: StudyAnalysis) -> None:
@@ -389,12 +413,7 @@ def _study1_section(doc: Doc, st: StudyAnalysis) -> None:
         tests_table(h1),
         "Tests of H1. Paper-faithful rows treat all trials as independent; recommended rows allow for participants.",
     )
-    gee = _row(st.tests, "GEE rate vs chance")
-    overall = (
-        (gee.estimate, gee.ci_low, gee.ci_high)
-        if gee is not None and np.isfinite(gee.estimate)
-        else None
-    )
+    overall = _interval(st.tests, "GEE rate vs chance")
     doc.figure(
         "turing_per_word.png",
         _png(fig_turing_words(st.per_word, c, m, overall)),
@@ -517,12 +536,7 @@ def _study2_section(doc: Doc, st: StudyAnalysis) -> None:
         _png(fig_readability(st.per_word, d)),
         "Left: success rate per writer (95 % Wilson CI), dots are participants. Right: each word's success rate in both writings.",
     )
-    tost = _row(st.tests, f"paired TOST by participant (±{m:g})")
-    diff = (
-        (tost.estimate, tost.ci_low, tost.ci_high)
-        if tost is not None and np.isfinite(tost.estimate)
-        else None
-    )
+    diff = _interval(st.tests, f"paired TOST by participant (±{m:g})")
     doc.figure(
         "readability_differences.png",
         _png(fig_differences(st.per_participant, m, diff)),

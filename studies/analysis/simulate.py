@@ -1,6 +1,6 @@
 """Simulated participants with known truth, written in the response file's exact columns.
 
-The answers follow a crossed logit model,
+The answers follow a crossed logit model (:mod:`studies.analysis.crossed_logit`),
 ``logit P(answer) = b0 + u_participant + v_word`` with ``u ~ N(0, su^2)``, ``v ~ N(0, sv^2)``,
 whose parameters are *calibrated* so that the stated truth holds on the probability scale:
 
@@ -27,6 +27,7 @@ import numpy as np
 import pandas as pd
 from scipy import optimize, special, stats
 
+from studies.analysis.crossed_logit import MAX_ICC, intercept, latent_parameters
 from studies.analysis.schema import N_OPTIONS, READABILITY, STUDY1_COLUMNS, STUDY2_COLUMNS, TURING
 
 DEFAULT_WORDS: tuple[str, ...] = (
@@ -41,78 +42,22 @@ DEFAULT_WORDS: tuple[str, ...] = (
     "robot",
     "hand",
 )
-_NODES, _WEIGHTS = np.polynomial.hermite.hermgauss(48)
-_Z = math.sqrt(2.0) * _NODES  # standard-normal nodes
-_W = _WEIGHTS / math.sqrt(math.pi)
 CONFIDENCE_CUTS = np.array([1.5, 2.5, 3.5, 4.5])
 CONFIDENCE_LATENT_SD = 1.5
 APP_VERSION = "simulated"
-MAX_ICC = 0.5  #: largest icc + word_icc the calibration accepts
 
-
-def _moments(b0: float, su: float, sv: float) -> tuple[float, float, float]:
-    """(mean, Var_u E[p|u], Var_v E[p|v]) of p = expit(b0 + su z1 + sv z2) by quadrature."""
-    p = special.expit(b0 + su * _Z[:, None] + sv * _Z[None, :])
-    mean = float(_W @ p @ _W)
-    by_u = p @ _W
-    by_v = _W @ p
-    return mean, float(_W @ (by_u - mean) ** 2), float(_W @ (by_v - mean) ** 2)
-
-
-def _intercept(rate: float, su: float, sv: float) -> float:
-    """b0 such that the population-average rate is ``rate``."""
-    reach = 30.0 + 8.0 * (su + sv)  # |b0| needed grows with the random-effect SDs
-    return float(
-        optimize.brentq(lambda b: _moments(b, su, sv)[0] - rate, -reach, reach, xtol=1e-12)
-    )
-
-
-def latent_parameters(
-    rate: float, icc: float = 0.0, word_icc: float = 0.0
-) -> tuple[float, float, float]:
-    """Calibrate ``(b0, su, sv)`` of the logit model to a marginal rate and two ICCs.
-
-    Parameters
-    ----------
-    rate : float
-        Population-average probability, in (0, 1).
-    icc, word_icc : float
-        Participant and word shares of the 0/1 answers' variance (probability scale), >= 0,
-        together at most :data:`MAX_ICC` (0.5; larger shares need logit SDs beyond the quadrature).
-
-    Returns
-    -------
-    b0, su, sv : float
-        Intercept and random-effect SDs on the logit scale.
-    """
-    if not 0 < rate < 1:
-        raise ValueError(f"rate {rate} is outside (0, 1)")
-    if icc < 0 or word_icc < 0 or icc + word_icc > MAX_ICC:
-        raise ValueError(
-            f"icc {icc} and word_icc {word_icc} must be >= 0 with a sum of at most {MAX_ICC}"
-        )
-    target = rate * (1 - rate)
-
-    def sd_for(share: float, other: float, which: int) -> float:
-        if share == 0:
-            return 0.0
-
-        def f(s: float) -> float:
-            su, sv = (s, other) if which == 1 else (other, s)
-            return _moments(_intercept(rate, su, sv), su, sv)[which] - share * target
-
-        return float(optimize.brentq(f, 1e-6, 20.0, xtol=1e-10))
-
-    su = sd_for(icc, 0.0, 1)
-    sv = sd_for(word_icc, su, 2)
-    for _ in range(20):  # alternate until both shares hold together
-        su_new = sd_for(icc, sv, 1)
-        sv_new = sd_for(word_icc, su_new, 2)
-        done = abs(su_new - su) < 1e-9 and abs(sv_new - sv) < 1e-9
-        su, sv = su_new, sv_new
-        if done:
-            break
-    return _intercept(rate, su, sv), su, sv
+__all__ = [
+    "APP_VERSION",
+    "CONFIDENCE_CUTS",
+    "CONFIDENCE_LATENT_SD",
+    "DEFAULT_WORDS",
+    "MAX_ICC",
+    "Truth",
+    "confidence_shift",
+    "latent_parameters",
+    "simulate_readability",
+    "simulate_turing",
+]
 
 
 def confidence_shift(mean: float, sd: float = CONFIDENCE_LATENT_SD) -> float:
@@ -169,6 +114,46 @@ def _rt(rng: np.random.Generator, n: int) -> np.ndarray:
     return np.round(rng.lognormal(math.log(4000), 0.5, n))
 
 
+def _trials(
+    rng: np.random.Generator,
+    i: int,
+    study: str,
+    list_id: str,
+    n_trials: int,
+    checks: int,
+    start: datetime,
+    seed: int,
+    careless: bool,
+) -> list[tuple[bool, dict]]:
+    """Participant ``i``'s trials in order: (is an attention check, the columns every trial has).
+
+    ``checks`` of them (never the first) are attention checks, failed by a ``careless``
+    participant."""
+    check_at = _check_positions(rng, n_trials, checks)
+    rts = _rt(rng, n_trials)
+    stamps = _timestamps(rng, n_trials, start, rts)
+    pid, sid = f"P{i + 1:04d}", f"S{i + 1:04d}"
+    return [
+        (
+            t in check_at,
+            dict(
+                participant_id=pid,
+                session_id=sid,
+                study=study,
+                list_id=list_id,
+                trial=t,
+                rt_ms=f"{rts[t]:.0f}",
+                timestamp=stamps[t],
+                app_version=APP_VERSION,
+                seed=seed,
+                is_attention_check=_bool(t in check_at),
+                attention_pass=_bool(not careless) if t in check_at else "",
+            ),
+        )
+        for t in range(n_trials)
+    ]
+
+
 def _bool(x) -> str:
     return "true" if bool(x) else "false"
 
@@ -220,29 +205,15 @@ def simulate_turing(
     total = participants + inattentive
     for i in range(total):
         careless = i >= participants
-        pid, sid = f"P{i + 1:04d}", f"S{i + 1:04d}"
         u = rng.normal(0, su) if su > 0 else 0.0
         a = rng.normal(0, c_between)
         order = rng.permutation(len(words))
         positions = rng.permutation(np.resize(rng.permutation(n_options), len(words)))
         n_trials = len(words) + attention_checks
-        check_at = _check_positions(rng, n_trials, attention_checks)
-        rts = _rt(rng, n_trials)
-        stamps = _timestamps(rng, n_trials, start, rts)
+        trials = _trials(rng, i, TURING, "", n_trials, attention_checks, start, seed, careless)
         w_iter = iter(zip(order, positions))
-        for t in range(n_trials):
-            base = dict(
-                participant_id=pid,
-                session_id=sid,
-                study=TURING,
-                list_id="",
-                trial=t,
-                rt_ms=f"{rts[t]:.0f}",
-                timestamp=stamps[t],
-                app_version=APP_VERSION,
-                seed=seed,
-            )
-            if t in check_at:
+        for is_check, base in trials:
+            if is_check:
                 target = int(rng.integers(n_options))
                 passed = not careless
                 chosen = (
@@ -256,8 +227,6 @@ def simulate_turing(
                         chosen_index=chosen,
                         chose_robot="",
                         confidence="",
-                        is_attention_check="true",
-                        attention_pass=_bool(passed),
                     )
                 )
                 continue
@@ -278,8 +247,6 @@ def simulate_turing(
                     chosen_index=chosen,
                     chose_robot=_bool(chose),
                     confidence=conf,
-                    is_attention_check="false",
-                    attention_pass="",
                 )
             )
     frame = pd.DataFrame(rows)[list(STUDY1_COLUMNS)]
@@ -338,35 +305,23 @@ def simulate_readability(
     human_rate = robot_rate if human_rate is None else human_rate
     rng = np.random.default_rng(seed)
     _, su, sv = latent_parameters((robot_rate + human_rate) / 2, icc, word_icc)
-    b_h, b_r = _intercept(human_rate, su, sv), _intercept(robot_rate, su, sv)
+    b_h, b_r = intercept(human_rate, su, sv), intercept(robot_rate, su, sv)
     v = rng.normal(0, sv, len(words)) if sv > 0 else np.zeros(len(words))
     half = len(words) // 2
     start = datetime(2025, 3, 8, tzinfo=timezone.utc)
     rows = []
     for i in range(participants + inattentive):
         careless = i >= participants
-        pid, sid = f"P{i + 1:04d}", f"S{i + 1:04d}"
         list_id = "A" if i % 2 == 0 else "B"
         u = rng.normal(0, su) if su > 0 else 0.0
         order = rng.permutation(len(words))
         n_trials = len(words) + attention_checks
-        check_at = _check_positions(rng, n_trials, attention_checks)
-        rts = _rt(rng, n_trials)
-        stamps = _timestamps(rng, n_trials, start, rts)
+        trials = _trials(
+            rng, i, READABILITY, list_id, n_trials, attention_checks, start, seed, careless
+        )
         w_iter = iter(order)
-        for t in range(n_trials):
-            base = dict(
-                participant_id=pid,
-                session_id=sid,
-                study=READABILITY,
-                list_id=list_id,
-                trial=t,
-                rt_ms=f"{rts[t]:.0f}",
-                timestamp=stamps[t],
-                app_version=APP_VERSION,
-                seed=seed,
-            )
-            if t in check_at:
+        for is_check, base in trials:
+            if is_check:
                 passed = not careless
                 typed = "attention" if passed else "asdf"
                 rows.append(
@@ -376,8 +331,6 @@ def simulate_readability(
                         writer="",
                         typed_text=typed,
                         correct=_bool(passed),
-                        is_attention_check="true",
-                        attention_pass=_bool(passed),
                     )
                 )
                 continue
@@ -394,8 +347,6 @@ def simulate_readability(
                     writer="human" if human else "robot",
                     typed_text=typed,
                     correct=_bool(ok),
-                    is_attention_check="false",
-                    attention_pass="",
                 )
             )
     frame = pd.DataFrame(rows)[list(STUDY2_COLUMNS)]

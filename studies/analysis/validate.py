@@ -132,6 +132,12 @@ def _check_rows(
         for i in mask[mask].index:
             problems.append((int(lines[i]), text(i)))
 
+    def boolean(col: str, accepted: str = "true/false (1/0)") -> pd.Series:
+        """``df[col]`` as 1.0/0.0 (NaN where empty); any other value is reported."""
+        val, bad = _bool(df[col])
+        report(bad, lambda i: f"{col} {df.at[i, col]!r} is not {accepted}")
+        return val
+
     for col in ("participant_id", "word"):
         report(df[col] == "", lambda i, c=col: f"{c} is empty (accepted: a non-empty value)")
         out[col] = df[col]
@@ -139,25 +145,12 @@ def _check_rows(
         out[col] = df.get(col, "")
 
     if "is_attention_check" in df:
-        att, bad = _bool(df["is_attention_check"])
-        report(
-            bad,
-            lambda i: (
-                f"is_attention_check {df.at[i, 'is_attention_check']!r} is not true/false (1/0)"
-            ),
-        )
-        out["is_attention_check"] = att.fillna(0.0).astype(bool)
+        out["is_attention_check"] = boolean("is_attention_check").fillna(0.0).astype(bool)
     else:
         out["is_attention_check"] = False
     if "attention_pass" in df:
-        ap, bad = _bool(df["attention_pass"])
-        report(
-            bad,
-            lambda i: (
-                f"attention_pass {df.at[i, 'attention_pass']!r} is not true/false (1/0) or empty"
-            ),
-        )
-        out["attention_pass"] = ap.where(out["is_attention_check"])
+        passed = boolean("attention_pass", "true/false (1/0) or empty")
+        out["attention_pass"] = passed.where(out["is_attention_check"])
     else:
         out["attention_pass"] = np.nan
     check = out["is_attention_check"]
@@ -200,10 +193,7 @@ def _check_rows(
         have_idx = out["robot_index"].notna() & out["chosen_index"].notna()
         from_idx = (out["chosen_index"] == out["robot_index"]).astype(float).where(have_idx)
         if "chose_robot" in df:
-            chose, bad = _bool(df["chose_robot"])
-            report(
-                bad, lambda i: f"chose_robot {df.at[i, 'chose_robot']!r} is not true/false (1/0)"
-            )
+            chose = boolean("chose_robot")
             clash = chose.notna() & have_idx & (chose != from_idx)
             report(
                 clash,
@@ -264,8 +254,7 @@ def _check_rows(
                 index=df.index,
             )
         if "correct" in df:
-            corr, bad = _bool(df["correct"])
-            report(bad, lambda i: f"correct {df.at[i, 'correct']!r} is not true/false (1/0)")
+            corr = boolean("correct")
             if derived is not None:
                 filled = corr.isna() & (df["correct"] == "")
                 if (filled & regular).any():

@@ -1,6 +1,6 @@
 /*
  * prg-study capture page: records a writer's pen trajectories, one word at a time, written in
- * one continuous stroke (the paper's group 1). No dependencies; runs from file://.
+ * one continuous stroke (the paper's group 1). No dependencies but common.js; runs from file://.
  *
  * Reads window.PRG_CAPTURE_CONFIG (config.js, written by `prg-study build`): words, canvas size,
  * on_lift ("restart": lifting the pen clears the word and the writer starts again; "flag": the
@@ -24,26 +24,11 @@
 
   var cfg = window.PRG_CAPTURE_CONFIG;
   var app = document.getElementById("app");
+  var page = window.PRGPage;  // common.js
+  var el = page.el;
   var WRITER_RE = /^[A-Za-z0-9_-]{1,64}$/;
 
-  function el(tag, attrs, children) {
-    var node = document.createElement(tag);
-    Object.keys(attrs || {}).forEach(function (key) {
-      var value = attrs[key];
-      if (value === null || value === undefined || value === false) return;
-      if (key === "text") node.textContent = value;
-      else node.setAttribute(key, value === true ? "" : String(value));
-    });
-    (children || []).forEach(function (child) {
-      node.appendChild(typeof child === "string" ? document.createTextNode(child) : child);
-    });
-    return node;
-  }
-
-  function show(nodes) {
-    app.textContent = "";
-    nodes.forEach(function (n) { app.appendChild(n); });
-  }
+  function show(nodes) { page.show(app, nodes); }
 
   var params = new URLSearchParams(window.location.search);
   var state = {
@@ -255,12 +240,7 @@
   }
 
   function download(text) {
-    var blob = new Blob([text], { type: "application/json" });
-    var stamp = new Date().toISOString().replace(/[-:]/g, "").replace(/\..*$/, "");
-    var a = el("a", { href: URL.createObjectURL(blob), download: "capture_" + state.writer_id + "_" + stamp + ".json" });
-    document.body.appendChild(a);
-    a.click();
-    setTimeout(function () { URL.revokeObjectURL(a.href); a.remove(); }, 60000);
+    page.download(text, "application/json", "capture_" + state.writer_id + "_" + page.fileStamp() + ".json");
   }
 
   function finish() {
@@ -279,9 +259,8 @@
     download(text);
     if (cfg.post_url) {
       status.textContent = "Sending\u2026";
-      fetch(cfg.post_url, { method: "POST", headers: { "Content-Type": "text/plain;charset=utf-8" }, body: text })
-        .then(function (r) {
-          if (!r.ok) throw new Error("HTTP " + r.status);
+      page.postText(cfg.post_url, text, 1)
+        .then(function () {
           state.posted = true;
           status.textContent = "The recording was sent.";
         })

@@ -1,5 +1,6 @@
 /*
- * prg-study: the questionnaire page of a human-vs-robot handwriting study (no dependencies).
+ * prg-study: the questionnaire page of a human-vs-robot handwriting study (no dependencies but
+ * common.js, loaded before it).
  *
  * Reads window.PRG_STUDY_CONFIG (config.js) and window.PRG_STUDY_TRIALS (trials.js), both written
  * by `prg-study build`, so the page runs from file:// and from any static host.
@@ -20,26 +21,12 @@
   var cfg = window.PRG_STUDY_CONFIG;
   var list = window.PRG_STUDY_TRIALS;
   var app = document.getElementById("app");
+  var page = window.PRGPage;  // common.js
+  var el = page.el;
 
   // ------------------------------------------------------------------ small helpers
-  function el(tag, attrs, children) {
-    var node = document.createElement(tag);
-    Object.keys(attrs || {}).forEach(function (key) {
-      var value = attrs[key];
-      if (value === null || value === undefined || value === false) return;
-      if (key === "text") node.textContent = value;
-      else if (key === "onclick") node.addEventListener("click", value);
-      else node.setAttribute(key, value === true ? "" : String(value));
-    });
-    (children || []).forEach(function (child) {
-      node.appendChild(typeof child === "string" ? document.createTextNode(child) : child);
-    });
-    return node;
-  }
-
   function show(nodes) {
-    app.textContent = "";
-    nodes.forEach(function (n) { app.appendChild(n); });
+    page.show(app, nodes);
     window.scrollTo(0, 0);
   }
 
@@ -322,32 +309,12 @@
 
   // ------------------------------------------------------------------ saving and completion
   function fileName() {
-    var stamp = new Date().toISOString().replace(/[-:]/g, "").replace(/\..*$/, "");
     var who = state.participant_id.replace(/[^A-Za-z0-9_-]/g, "_").slice(0, 64);
-    return cfg.name + "_" + who + "_" + stamp + ".csv";
+    return cfg.name + "_" + who + "_" + page.fileStamp() + ".csv";
   }
 
   function download(csv) {
-    var blob = new Blob([csv], { type: "text/csv;charset=utf-8" });
-    var a = el("a", { href: URL.createObjectURL(blob), download: fileName() });
-    document.body.appendChild(a);
-    a.click();
-    setTimeout(function () { URL.revokeObjectURL(a.href); a.remove(); }, 60000);
-  }
-
-  function post(csv, tries) {
-    return fetch(cfg.save.post_url, {
-      method: "POST",
-      headers: { "Content-Type": "text/plain;charset=utf-8" },  // a simple request: no CORS preflight
-      body: csv,
-    }).then(function (response) {
-      if (!response.ok) throw new Error("HTTP " + response.status);
-    }).catch(function (err) {
-      if (tries > 1) {
-        return new Promise(function (r) { setTimeout(r, 1000); }).then(function () { return post(csv, tries - 1); });
-      }
-      throw err;
-    });
+    page.download(csv, "text/csv;charset=utf-8", fileName());
   }
 
   function finish() {
@@ -375,7 +342,7 @@
     show(nodes);
     window.removeEventListener("beforeunload", leaveWarning);
     if (cfg.save.download) download(csv);
-    var saving = cfg.save.post_url ? post(csv, 3) : Promise.resolve();
+    var saving = cfg.save.post_url ? page.postText(cfg.save.post_url, csv, 3) : Promise.resolve();
     saving.then(function () {
       state.saved = true;
       status.textContent = cfg.save.post_url ? "Your answers were saved." : "";

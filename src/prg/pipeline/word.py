@@ -35,6 +35,7 @@ from prg.errors import UsageError
 from prg.files import atomic_path
 from prg.pipeline.connect import ConnectionResult
 from prg.pipeline.layout import word_breaks
+from prg.plotting import CONNECTION, FIGURE_INK, PAPER, SPACE, hex_colour
 
 if TYPE_CHECKING:  # the DMP module (scipy) is imported when a word has a DMP
     from prg.pipeline.dmp import DMP
@@ -46,11 +47,11 @@ DEFAULT_SPEED_CM_S = 2.0
 
 # How each kind is drawn when highlighting: (colour, width as a fraction of the pen width, dashes)
 _STYLES = {
-    "letter": ("#000000", 1.0, None),
-    "connection": ("#d62728", 1.0, None),
-    "space": ("#9e9e9e", 0.5, (3.0, 3.0)),
+    "letter": (hex_colour(FIGURE_INK), 1.0, None),
+    "connection": (hex_colour(CONNECTION), 1.0, None),
+    "space": (hex_colour(SPACE), 0.5, (3.0, 3.0)),
 }
-_INK = ("#000000", 1.0, None)
+_INK = (hex_colour(FIGURE_INK), 1.0, None)
 
 
 def _arc_length(points: np.ndarray) -> float:
@@ -322,7 +323,7 @@ class WordTrajectory:
             f'<svg xmlns="http://www.w3.org/2000/svg" width="{w:.4f}cm" height="{h:.4f}cm" '
             f'viewBox="0 0 {w:.6f} {h:.6f}">',
             f"<title>{escape(self.text)}</title>",
-            '<rect width="100%" height="100%" fill="#ffffff"/>',
+            f'<rect width="100%" height="100%" fill="{hex_colour(PAPER)}"/>',
         ]
         for kind, pts, (colour, rel_width, dashes) in self._styled(highlight):
             coords = " ".join(f"{x - lo[0]:.5f},{hi[1] - y:.5f}" for x, y in pts)

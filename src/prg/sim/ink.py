@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from prg.files import atomic_path
+from prg.plotting import INK, PAPER, hex_colour
 from prg.sim.geometry import Paper
 
 __all__ = ["draw_strokes", "ink_png", "ink_svg", "page_texture"]
@@ -35,8 +36,8 @@ def draw_strokes(
     size_px: tuple[int, int],
     px_per_cm: float,
     pen_width_mm: float = PEN_WIDTH_MM,
-    background: tuple[int, int, int] = (255, 255, 255),
-    ink: tuple[int, int, int] = (20, 20, 20),
+    background: tuple[int, int, int] = PAPER,
+    ink: tuple[int, int, int] = INK,
 ) -> NDArray[np.uint8]:
     """Rasterise strokes (cm, y up) into an RGB image whose row 0 is the top.
 
@@ -135,7 +136,7 @@ def ink_svg(
         f'<svg xmlns="http://www.w3.org/2000/svg" width="{w:.4f}cm" height="{h:.4f}cm" '
         f'viewBox="0 0 {w:.6f} {h:.6f}">',
         f"<title>{escape(title)}</title>",
-        '<rect width="100%" height="100%" fill="#ffffff"/>',
+        f'<rect width="100%" height="100%" fill="{hex_colour(PAPER)}"/>',
     ]
     for stroke in strokes:
         pts = np.asarray(stroke, dtype=np.float64).reshape(-1, 2)
@@ -145,7 +146,7 @@ def ink_svg(
             pts = np.repeat(pts, 2, axis=0)
         coords = " ".join(f"{x - lo[0]:.4f},{hi[1] - y:.4f}" for x, y in pts)
         lines.append(
-            f'<polyline class="ink" points="{coords}" fill="none" stroke="#141414" '
+            f'<polyline class="ink" points="{coords}" fill="none" stroke="{hex_colour(INK)}" '
             f'stroke-width="{pen_width_mm / 10:.4f}" stroke-linecap="round" '
             'stroke-linejoin="round"/>'
         )
