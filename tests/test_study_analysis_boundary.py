@@ -14,7 +14,7 @@ import pandas as pd
 import pytest
 
 from studies.analysis import stats as S
-from studies.analysis.simulate import simulate_readability, simulate_turing
+from studies.analysis.participants import simulate_readability, simulate_turing
 from studies.cli import main
 
 N = 24  # participants: enough for the GEE (>= 20 clusters) and quick

@@ -18,9 +18,9 @@ from studies.analysis import stats as S
 from studies.analysis.analyze import analyze_table
 from studies.analysis.commands import register
 from studies.analysis.config import AnalysisSettings
+from studies.analysis.participants import simulate_turing
 from studies.analysis.report import build_report
 from studies.analysis.schema import STUDY1_COLUMNS
-from studies.analysis.simulate import simulate_turing
 from studies.analysis.stats import TEST_COLUMNS
 
 REPO = Path(__file__).resolve().parents[1]

@@ -10,7 +10,7 @@ from studies.analysis import stats as S
 from studies.analysis.analyze import analyze_table
 from studies.analysis.config import AnalysisSettings
 from studies.analysis.crossed_logit import moments as _moments
-from studies.analysis.simulate import (
+from studies.analysis.participants import (
     confidence_shift,
     latent_parameters,
     simulate_readability,

@@ -12,8 +12,8 @@ import pytest
 
 from prg.errors import UsageError
 from studies.analysis.config import AnalysisSettings, load_config, with_overrides
+from studies.analysis.participants import simulate_readability, simulate_turing
 from studies.analysis.schema import COLUMNS, STUDY1_COLUMNS, STUDY2_COLUMNS
-from studies.analysis.simulate import simulate_readability, simulate_turing
 from studies.analysis.validate import (
     ResponseFileError,
     analysis_rows,

@@ -11,7 +11,7 @@ Modules:
 - :mod:`~studies.analysis.report` — Markdown/HTML report, figures, CSVs (atomic);
 - :mod:`~studies.analysis.crossed_logit` — the crossed logit model of the answers, calibrated;
 - :mod:`~studies.analysis.power` — power and sample size for both studies;
-- :mod:`~studies.analysis.simulate` — simulated participants with known truth;
+- :mod:`~studies.analysis.participants` — simulated participants with known truth;
 - :mod:`~studies.analysis.paper` — the paper's numbers reproduced from its summaries;
 - :mod:`~studies.analysis.commands` — the ``analyze``, ``power`` and ``simulate`` sub-commands.
 
@@ -32,8 +32,8 @@ _EXPORTS = {
     "analyze_turing": "analyze",
     "analyze_readability": "analyze",
     "write_report": "report",
-    "simulate_turing": "simulate",
-    "simulate_readability": "simulate",
+    "simulate_turing": "participants",
+    "simulate_readability": "participants",
     "reproduce_paper": "paper",
     "register": "commands",
 }

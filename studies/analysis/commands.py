@@ -428,7 +428,7 @@ def _write_files(*pairs) -> None:
 
 def _words(args: argparse.Namespace) -> list[str]:
     from studies.analysis.config import load_config
-    from studies.analysis.simulate import DEFAULT_WORDS
+    from studies.analysis.participants import DEFAULT_WORDS
 
     if args.words:
         text = args.words.strip()
@@ -458,7 +458,7 @@ def _words(args: argparse.Namespace) -> list[str]:
 
 def run_simulate(args: argparse.Namespace) -> int:
     """``prg-study simulate``: write a simulated responses CSV and its truth JSON."""
-    from studies.analysis.simulate import simulate_readability, simulate_turing
+    from studies.analysis.participants import simulate_readability, simulate_turing
 
     if args.icc + args.word_icc > 0.5:
         raise UsageError(f"--icc {args.icc} plus --word-icc {args.word_icc} must be at most 0.5")

@@ -6,7 +6,7 @@ Its expectations over both random effects are taken by Gauss-Hermite quadrature
 and word shares of the answers' variance (:func:`moments`), the intercept for a given rate
 (:func:`intercept`) and the whole model for a rate and two shares (:func:`latent_parameters`).
 
-Shared by the simulator (:mod:`studies.analysis.simulate`), which draws answers from the model,
+Shared by the simulator (:mod:`studies.analysis.participants`), which draws answers from the model,
 and the power planner (:mod:`studies.analysis.power`), which integrates over it.
 """
 

@@ -30,13 +30,14 @@ Modules
     The ink as PNG, SVG and the paper's texture.
 :mod:`prg.recording.simulation`
     The Rerun recording (URDF arm animated over ``sim_time``, pen path, ink, command).
-:mod:`prg.sim.words`
+:mod:`prg.sim.font`
     Words from a Hershey font, without a model (tests, benchmark, a first try).
 """
 
 from __future__ import annotations
 
 from prg.recording.simulation import record_simulation
+from prg.sim.font import font_word
 from prg.sim.geometry import (
     Paper,
     distance_to_polylines,
@@ -51,7 +52,6 @@ from prg.sim.plan import MotionPlan, MotionSettings, plan_motion
 from prg.sim.robots import RobotSettings
 from prg.sim.scene import Camera, Scene
 from prg.sim.settings import ControlSettings, SimSettings
-from prg.sim.words import font_word
 from prg.sim.workspace import ReachMap, check_workspace
 from prg.sim.writing import SimResult, simulate_word, word_samples
 
