@@ -13,7 +13,7 @@ from numpy.testing import assert_allclose
 
 from prg.errors import UsageError
 from prg.recording import read_component, read_entities, read_times
-from prg.recording.simulation import recording_urdf
+from prg.recording.simulation import record_simulation, recording_urdf
 from prg.sim import (
     IKSolver,
     Paper,
@@ -26,7 +26,6 @@ from prg.sim import (
     font_word,
     ink_png,
     ink_svg,
-    record_simulation,
     simulate_word,
 )
 from prg.sim.geometry import bounding_box, runs

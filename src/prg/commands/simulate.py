@@ -38,6 +38,7 @@ from prg.commands.settings import simulation_settings, writer_from_config
 from prg.errors import UsageError
 from prg.files import staged_outputs
 from prg.pipeline.word import WordTrajectory
+from prg.recording import record_simulation
 from prg.tracking import task_run
 
 log = logging.getLogger(__name__)
@@ -88,7 +89,9 @@ def simulate(cfg: DictConfig) -> tuple[Any, Path]:
                 (staging / "word").mkdir()
                 shutil.copyfile(given, staging / "word" / "word.json")
             result = simulate_word(word, robot, settings, gui=cfg.gui, progress=cfg.progress)
-            result.save(staging, record=cfg.record)
+            result.save(staging)
+            if cfg.record:
+                record_simulation(staging / "sim.rrd", result)
         m = result.metrics
         log.info(
             "%s wrote %r (%.1f x %.1f cm): tracking error mean %.4f mm, max %.4f mm; %.1f s "

@@ -36,7 +36,6 @@ Modules
 
 from __future__ import annotations
 
-from prg.recording.simulation import record_simulation
 from prg.sim.font import font_word
 from prg.sim.geometry import (
     Paper,
@@ -78,7 +77,6 @@ __all__ = [
     "max_ink_gap",
     "pen_down_samples",
     "plan_motion",
-    "record_simulation",
     "simulate_word",
     "tracking_error",
     "word_samples",

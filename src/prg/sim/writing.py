@@ -194,13 +194,12 @@ class SimResult:
         """The ink: consecutive in-contact tip samples, each ``(m, 2)`` in cm (paper frame)."""
         return [self.tip_paper[a:b, :2] for a, b in runs(self.contact)]
 
-    def save(self, folder: str | os.PathLike, record: bool = True) -> Path:
+    def save(self, folder: str | os.PathLike) -> Path:
         """``ink.png``, ``ink.svg``, ``page.png``, ``joints.csv``, ``joints.npz``, ``metrics.json``
-        and (``record``) the Rerun recording ``sim.rrd`` into ``folder``, all or nothing (through a staging folder; files already in ``folder``
+        into ``folder``, all or nothing (through a staging folder; files already in ``folder``
         under other names are kept), as ``prg-simulate`` writes them."""
         from PIL import Image
 
-        from prg.recording import record_simulation
         from prg.sim.ink import ink_png, ink_svg
 
         folder = Path(folder)
@@ -238,8 +237,6 @@ class SimResult:
                 q_plan=self.q_plan,
             )
             write_json(staging / "metrics.json", self.metrics)
-            if record:
-                record_simulation(staging / "sim.rrd", self)
         return folder
 
     @cached_property
