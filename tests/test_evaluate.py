@@ -12,12 +12,13 @@ import torch
 from mlflow import MlflowClient
 
 from prg.commands.cli import compose_config
-from prg.commands.evaluate import _subset, _test_data, evaluate
+from prg.commands.evaluate import dataset_dir, evaluate
 from prg.commands.train import train
 from prg.evaluation.classifiers import FOLD, load_classifier, predict
 from prg.evaluation.coherence import coherence_cells, per_class_rate
 from prg.evaluation.likelihood import MODEL_STD_SUFFIX, TABLE1_CELLS, estimate_cell
 from prg.evaluation.reports import PAPER_TABLE1
+from prg.evaluation.run import load_test_data, subset
 from prg.evaluation.smoothness import median_roughness
 from prg.models.checkpoint import load_model
 from prg.models.likelihoods import Likelihoods
@@ -93,7 +94,7 @@ def test_reports_tables_figures_and_mlflow(trained_root, small_dataset):
 
     # the one-pass pair equals two separate estimates with the same seed: the default table
     # under a unit-variance Gaussian, the second under the model's own std
-    data = _subset(_test_data(cfg), 12, cfg.seed)
+    data = subset(load_test_data(dataset_dir(cfg)), 12, cfg.seed)
     by_key = {(r["model"], r["cell"]): r["value"] for r in result.table1}
     for family, cell in (("muse", "logp_T_given_S"), ("avae_ti", "logp_T")):
         target, given = TABLE1_CELLS[cell]
@@ -134,7 +135,7 @@ def test_reports_tables_figures_and_mlflow(trained_root, small_dataset):
     exact = {k for k in metrics if "/coherence_" in k and "/coherence_folded_" not in k}
     folded = {k for k in metrics if "/coherence_folded_" in k}
     assert folded == {k.replace("/coherence_", "/coherence_folded_", 1) for k in exact}
-    test = _test_data(cfg)
+    test = load_test_data(dataset_dir(cfg))
     labels = test["label"].numpy()
     muse_s = models["muse"].generate({"label": test["label"]}, "traj")[0]
     classifier, _ = load_classifier(trained_root / "models/classifiers/traj.pt")
@@ -268,3 +269,51 @@ def test_bad_input_gets_one_line_and_exit_2_and_writes_nothing(
     assert len(lines) == 1 and lines[0].startswith("prg-evaluate: error:"), lines
     assert expected in lines[0]
     assert not reports.exists()
+
+
+SETTINGS_REFUSED = [
+    (["parts=[plots]"], "parts ['plots']: choose from ['classifiers', 'likelihood', 'coherence']"),
+    (["parts=[]"], "parts []: choose from ['classifiers', 'likelihood', 'coherence']"),
+    (
+        ["likelihood.cells=[logp_X,logp_T]"],
+        "likelihood.cells ['logp_X']: use 'all' or a list of ['logp_T', 'logp_S', 'logp_I', "
+        "'logp_T_given_S', 'logp_T_given_I', 'logp_S_given_T', 'logp_I_given_T']",
+    ),
+    (
+        ["+coherence.temperatures.imputed=0"],
+        "coherence.temperatures: 'imputed' names the imputed kind; rename it",
+    ),
+]
+
+
+@pytest.mark.parametrize(
+    "args, expected", SETTINGS_REFUSED, ids=[a[0] for a, _ in SETTINGS_REFUSED]
+)
+def test_settings_refuse_a_value_naming_its_config_path(tmp_path, args, expected):
+    from prg.commands.evaluate import evaluation_settings
+    from prg.errors import UsageError
+
+    with pytest.raises(UsageError) as err:
+        evaluation_settings(_cfg(tmp_path, tmp_path, *args))
+    assert str(err.value) == expected
+
+
+def test_settings_of_the_shipped_config_and_of_the_library_alone():
+    from prg.commands.evaluate import evaluation_settings
+    from prg.errors import SettingsError
+    from prg.evaluation.settings import CoherenceSettings, EvaluationSettings, LikelihoodSettings
+
+    settings = evaluation_settings(compose_config("evaluate", ["likelihood.cells=logp_T"]))
+    assert settings.parts == ("likelihood", "coherence") and not settings.classifiers_only
+    assert settings.likelihood.requested == (["logp_T"], True)
+    assert settings.coherence.temperatures == {"mean": 0.0, "sampled": 1.0}
+    assert settings.coherence.impute_steps == 20
+    assert (settings.classifier.epochs, settings.classifier.lr) == (4, 0.002)
+    assert EvaluationSettings().likelihood.requested == (list(TABLE1_CELLS), False)
+    # the library names the field; the command layer adds the node's path
+    with pytest.raises(SettingsError, match=r"^k_marginal must be an integer in \[1, "):
+        LikelihoodSettings(k_marginal=0)
+    with pytest.raises(SettingsError, match=r"^temperatures\.mean must be a finite number"):
+        CoherenceSettings(temperatures={"mean": float("nan")})
+    with pytest.raises(SettingsError, match=r"^n_test must be an integer >= 1 or null"):
+        EvaluationSettings(n_test=0)

@@ -6,7 +6,6 @@ import math
 import pytest
 import torch
 
-from prg.commands.evaluate import Evaluation, metrics_of
 from prg.data.alphabet import ALPHABET
 from prg.evaluation.coherence import folded_correct
 from prg.evaluation.reports import (
@@ -15,6 +14,7 @@ from prg.evaluation.reports import (
     robustness_markdown,
     table1_markdown,
 )
+from prg.evaluation.run import Evaluation, metrics_of
 
 OWN_SECTION = "## Trajectory cells under each model's own std"
 

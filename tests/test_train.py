@@ -243,3 +243,39 @@ def test_resuming_a_one_cycle_run_with_a_larger_budget_is_refused(tmp_path, smal
     longer.trainer.max_epochs = 4
     with pytest.raises(UsageError, match="schedule spans 6 steps, the resumed run asks for 12"):
         train(longer)
+
+
+def test_the_datamodule_is_built_from_its_config_node_with_todays_overrides(small_dataset):
+    from prg.commands.train import build_datamodule, train_settings
+    from prg.data.datamodule import PRGDataModule
+
+    cfg = compose_config(
+        "train",
+        [
+            f"paths.data_dir={small_dataset}",
+            "model=avae_ti",
+            "model.batch_size=7",
+            "data.loader.num_workers=0",
+            "seed=3",
+        ],
+    )
+    assert cfg.datamodule._target_ == "prg.data.datamodule.PRGDataModule"
+    datamodule = build_datamodule(cfg)
+    assert isinstance(datamodule, PRGDataModule)
+    assert datamodule.root == small_dataset / "prepared/synthetic"
+    assert datamodule.modalities == ("traj", "image")
+    assert (datamodule.batch_size, datamodule.num_workers, datamodule.seed) == (7, 0, 3)
+    assert train_settings(cfg).modalities == ("traj", "image")
+
+
+def test_a_model_whose_modalities_the_data_lack_is_refused_in_one_line():
+    from prg.commands.train import train_settings
+    from prg.errors import UsageError
+
+    cfg = compose_config("train", ["model=avae_ti", "data.loader.modalities=[traj,label]"])
+    with pytest.raises(UsageError) as err:
+        train_settings(cfg)
+    assert str(err.value) == (
+        "model avae_ti needs modalities ['traj', 'image'] but the data provides ['traj', "
+        "'label'] (data.loader.modalities): ['image'] missing"
+    )

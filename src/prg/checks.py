@@ -96,10 +96,11 @@ METRES = Range(-10, 10)  # positions in the simulated scene (and joint angles, i
 DEGREES = Range(-360, 360)
 WEIGHT_MAX = 1e6  # loss and cost weights
 TEMPERATURE_MAX = 10.0  # latents drawn with their std times this: 1 is the model's own spread
+TEMPERATURE = non_negative(TEMPERATURE_MAX)
 
 # ---- the fields of library settings classes (each validates itself with its own table) ----
 GENERATE_RANGES: dict[str, Range] = {  # prg.pipeline.compose.GenerateSettings
-    "temperature": non_negative(TEMPERATURE_MAX),
+    "temperature": TEMPERATURE,
     "seed": SEED,
     "impute_steps": count(0, 1000),
     "speed_cm_s": positive(1000),
@@ -108,12 +109,28 @@ GENERATE_RANGES: dict[str, Range] = {  # prg.pipeline.compose.GenerateSettings
     "basis_per_100_samples": count(1, 100),
 }
 
-
-def check_fields(settings: Any, ranges: dict[str, Range]) -> None:
-    """Refuse the first field of a settings dataclass outside its range in ``ranges``
-    (:class:`~prg.errors.SettingsError` naming the field)."""
-    for name, spec in ranges.items():
-        require_number(getattr(settings, name), name, spec)
+LIKELIHOOD_RANGES: dict[str, Range] = {  # prg.evaluation.settings.LikelihoodSettings
+    "k_marginal": count(1, 1_000_000),
+    "k_conditional": count(1, 1_000_000),
+    "n_test": count(1, optional=True),
+    "batch_size": count(1, 100_000),
+    "chunk_rows": count(1, 10_000_000),  # bounds the memory
+    "traj_std": Range(0, 100, low_open=True, optional=True),
+}
+COHERENCE_RANGES: dict[str, Range] = {  # prg.evaluation.settings.CoherenceSettings
+    "impute_steps": count(0, 1000),
+    "batch_size": count(1, 1_000_000),
+}
+CLASSIFIER_RANGES: dict[str, Range] = {  # prg.evaluation.settings.ClassifierSettings
+    "epochs": count(1, 1000),
+    "batch_size": count(1, 1_000_000),
+    "lr": positive(10),
+    "seed": SEED,
+}
+EVALUATION_RANGES: dict[str, Range] = {  # prg.evaluation.settings.EvaluationSettings
+    "seed": SEED,
+    "n_test": count(1, optional=True),
+}
 
 
 def _under(prefix: str, ranges: dict[str, Range]) -> dict[str, Range]:
@@ -190,19 +207,10 @@ RANGES: dict[str, Range] = {
     "converged_epochs.*": count(1),
     # prg-evaluate
     "n_test": count(1, optional=True),
-    "likelihood.k_marginal": count(1, 1_000_000),
-    "likelihood.k_conditional": count(1, 1_000_000),
-    "likelihood.n_test": count(1, optional=True),
-    "likelihood.batch_size": count(1, 100_000),
-    "likelihood.chunk_rows": count(1, 10_000_000),  # bounds the memory
-    "likelihood.traj_std": Range(0, 100, low_open=True, optional=True),
-    "coherence.temperatures.*": non_negative(TEMPERATURE_MAX),
-    "coherence.impute_steps": count(0, 1000),
-    "coherence.batch_size": count(1, 1_000_000),
-    "classifier.epochs": count(1, 1000),
-    "classifier.batch_size": count(1, 1_000_000),
-    "classifier.lr": positive(10),
-    "classifier.seed": SEED,
+    **_under("likelihood", LIKELIHOOD_RANGES),
+    **_under("coherence", COHERENCE_RANGES),
+    "coherence.temperatures.*": TEMPERATURE,
+    **_under("classifier", CLASSIFIER_RANGES),
     # prg-write (and prg-dictaphone, prg-simulate, which run it)
     "layout.*": positive(100),  # cm, or fractions of the letter height
     "connection.delta": positive(10),

@@ -28,6 +28,7 @@ __all__ = [
     "at_least",
     "check",
     "check_fields",
+    "check_ranges",
     "checked",
     "integer",
     "listed_as_tuple",
@@ -163,3 +164,13 @@ class FromMapping:
 def listed_as_tuple(value: Any) -> Any:
     """A list (as YAML gives it) as a tuple (as the dataclasses hold it); anything else as is."""
     return tuple(value) if isinstance(value, list) else value
+
+
+def check_ranges(settings: Any, ranges: Mapping[str, Any]) -> None:
+    """Refuse the first field of a settings dataclass outside its :class:`~prg.checks.Range` in
+    ``ranges`` (field name to range; the tables live in :mod:`prg.checks`, which also checks
+    the config options with them)."""
+    from prg.checks import require_number
+
+    for name, spec in ranges.items():
+        require_number(getattr(settings, name), name, spec)

@@ -1,8 +1,10 @@
-"""Where the project's own files are: the ``conf/`` folder of configs and robot descriptions."""
+"""The project's own files: where the ``conf/`` folder of configs and robot descriptions is, and
+which commit of the code runs (recorded with every dataset, run and report)."""
 
 from __future__ import annotations
 
 import os
+import subprocess
 from pathlib import Path
 
 
@@ -10,3 +12,22 @@ def config_dir() -> Path:
     """The repository's ``conf/`` folder (``PRG_CONF_DIR`` overrides it)."""
     env = os.environ.get("PRG_CONF_DIR")
     return Path(env) if env else Path(__file__).resolve().parents[2] / "conf"
+
+
+def git_commit() -> str:
+    """Commit of the code that runs (``+dirty`` when src/ or conf/ have uncommitted changes),
+    or ``"unknown"`` outside a git checkout."""
+    where = Path(__file__).resolve().parent
+
+    def git(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run(["git", *args], cwd=where, capture_output=True, text=True, timeout=5)
+
+    try:
+        head = git("rev-parse", "HEAD")
+        if head.returncode != 0:
+            return "unknown"
+        top = git("rev-parse", "--show-toplevel").stdout.strip()
+        dirty = git("status", "--porcelain", "--", f"{top}/src", f"{top}/conf").stdout.strip()
+        return head.stdout.strip() + ("+dirty" if dirty else "")
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"

@@ -33,13 +33,15 @@ from omegaconf import DictConfig, OmegaConf
 
 from prg.checks import check_values
 from prg.commands.cli import check_output, hydra_command
-from prg.data.build import git_commit
+from prg.commands.settings import build
 from prg.data.datamodule import PRGDataModule, read_manifest
-from prg.errors import UsageError
+from prg.errors import PRGError, UsageError
 from prg.files import sha256_file, staged_outputs, write_json
 from prg.models.checkpoint import read_checkpoint
 from prg.models.module import PRGModule
+from prg.resources import git_commit
 from prg.tracking import PARENT_ENV, artifact_location, flatten, tracking_uri
+from prg.training.settings import TrainSettings
 
 log = logging.getLogger(__name__)
 
@@ -56,54 +58,43 @@ class TrainResult:
     last_checkpoint: str
 
 
-def _check_modalities(cfg: DictConfig) -> None:
-    provided = list(cfg.data.loader.modalities)
-    missing = [m for m in cfg.model.modalities if m not in provided]
-    if missing:
-        raise UsageError(
-            f"model {cfg.model.name} needs modalities {list(cfg.model.modalities)} but the data "
-            f"provides {provided} (data.loader.modalities): {missing} missing"
-        )
+def train_settings(cfg: DictConfig) -> TrainSettings:
+    """The model's modalities against the data's (``model``, ``data.loader.modalities``)."""
+    values = {
+        "model": cfg.model.name,
+        "modalities": list(cfg.model.modalities),
+        "provided": list(cfg.data.loader.modalities),
+    }
+    return build(TrainSettings, values, None)
 
 
-_TRAINER_NUMBERS = (
-    "max_epochs",
-    "max_steps",
-    "limit_train_batches",
-    "limit_val_batches",
-    "check_val_every_n_epoch",
-    "log_every_n_steps",
-)
-
-
-def _check_numbers(cfg: DictConfig) -> None:
-    for key in _TRAINER_NUMBERS:
-        value = cfg.trainer.get(key)
-        if value is not None and (isinstance(value, bool) or not isinstance(value, int | float)):
-            raise UsageError(f"trainer.{key} must be a number, got {value!r}")
-    for key in ("seed", "batch_size"):
-        node = cfg if key == "seed" else cfg.model
-        if (
-            isinstance(node[key], bool)
-            or not isinstance(node[key], int)
-            or node[key] < (0 if key == "seed" else 1)
-        ):
-            raise UsageError(
-                f"{'model.' if key == 'batch_size' else ''}{key} must be a "
-                f"{'non-negative' if key == 'seed' else 'positive'} integer, "
-                f"got {node[key]!r}"
-            )
-
-
-def _build(node: Any, what: str, **kwargs: Any) -> Any:
-    """instantiate() with a one-line UsageError naming the config node on bad values."""
+def _build(node: Any, what: str, own_errors: bool = False, **kwargs: Any) -> Any:
+    """instantiate() with a one-line UsageError naming the config node on bad values
+    (``own_errors``: the project's own one-line errors as they are)."""
     from hydra.errors import InstantiationException
 
     try:
         return instantiate(node, **kwargs)
     except InstantiationException as err:
         cause = err.__cause__ or err
+        if own_errors and isinstance(cause, PRGError):
+            raise cause from None
         raise UsageError(f"{what} config: {' '.join(str(cause).split())}") from None
+
+
+def build_datamodule(cfg: DictConfig) -> PRGDataModule:
+    """The data loaders of the ``datamodule`` node (its ``_target_``: PRGDataModule), with the
+    run's numbers from the options they are checked under: ``model.batch_size``,
+    ``data.loader.num_workers`` and ``seed``."""
+    return _build(
+        cfg.datamodule,
+        "datamodule",
+        own_errors=True,  # PRGDataModule's refusals read as when it was built by hand
+        batch_size=cfg.model.batch_size,
+        num_workers=cfg.data.loader.num_workers,
+        seed=cfg.seed,
+        _convert_="all",
+    )
 
 
 def _manifest(cfg: DictConfig) -> tuple[dict[str, Any], str]:
@@ -142,8 +133,7 @@ def train(cfg: DictConfig) -> TrainResult:
 
 def _train(cfg: DictConfig) -> TrainResult:
     check_values(cfg)
-    _check_modalities(cfg)
-    _check_numbers(cfg)
+    train_settings(cfg)
     manifest, manifest_hash = _manifest(cfg)
     check_output(cfg.checkpoint_dir, "checkpoint_dir")
     if cfg.get("export_dir"):
@@ -159,14 +149,7 @@ def _train(cfg: DictConfig) -> TrainResult:
             )
     L.seed_everything(cfg.seed, workers=True)
 
-    datamodule = PRGDataModule(
-        cfg.paths.data_dir,
-        cfg.data.name,
-        modalities=list(cfg.model.modalities),
-        batch_size=cfg.model.batch_size,
-        num_workers=cfg.data.loader.num_workers,
-        seed=cfg.seed,
-    )
+    datamodule = build_datamodule(cfg)
     datamodule.setup("fit")  # now: a dataset the model cannot take fails before any run starts
     module_cfg = OmegaConf.to_container(cfg.model.module, resolve=True)
     module: PRGModule = _build(module_cfg, "model", _recursive_=False)

@@ -10,7 +10,6 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
-import subprocess
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -40,6 +39,7 @@ from prg.data.uji import read_uji, select_single_stroke_alphabet
 from prg.errors import SettingsError, UsageError
 from prg.fields import check_fields, checked, integer
 from prg.files import atomic_path, json_text, sha256_file, staged_folder, write_json, write_text
+from prg.resources import git_commit
 from prg.signals import deferred
 
 log = logging.getLogger(__name__)
@@ -170,25 +170,6 @@ def preprocess_samples(
             dropped += 1
     shape = (0, n_points, 2)
     return (np.stack(trajs) if trajs else np.zeros(shape)), kept, dropped
-
-
-def git_commit() -> str:
-    """Commit of the code that runs (``+dirty`` when src/ or conf/ have uncommitted changes),
-    or ``"unknown"`` outside a git checkout."""
-    where = Path(prg.__file__).parent
-
-    def git(*args: str) -> subprocess.CompletedProcess:
-        return subprocess.run(["git", *args], cwd=where, capture_output=True, text=True, timeout=5)
-
-    try:
-        head = git("rev-parse", "HEAD")
-        if head.returncode != 0:
-            return "unknown"
-        top = git("rev-parse", "--show-toplevel").stdout.strip()
-        dirty = git("status", "--porcelain", "--", f"{top}/src", f"{top}/conf").stdout.strip()
-        return head.stdout.strip() + ("+dirty" if dirty else "")
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"
 
 
 def build_dataset(

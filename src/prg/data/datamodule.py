@@ -14,8 +14,7 @@ from torch.utils.data import DataLoader, Dataset
 
 from prg.data.store import load_split
 from prg.errors import UsageError
-
-MODALITIES: tuple[str, ...] = ("traj", "image", "label")
+from prg.modalities import LABEL, MODALITIES, NAMES
 
 
 class ModalityDataset(Dataset):
@@ -24,27 +23,21 @@ class ModalityDataset(Dataset):
     ``dataset[i]`` is a dict of single samples; ``dataset.__getitems__(indices)`` (used by the
     DataLoader) gathers a batch with one tensor index per modality instead of collating
     ``batch_size`` small dicts.
+
+    Each modality is held as stored (images as uint8 ink) and made a model input per batch
+    (:class:`prg.modalities.Modality`: ``load``, then ``prepare``).
     """
 
     def __init__(self, arrays: dict[str, np.ndarray], modalities: Sequence[str]):
         self.modalities = tuple(modalities)
-        self.tensors: dict[str, torch.Tensor] = {}
-        if "traj" in self.modalities:
-            self.tensors["traj"] = torch.from_numpy(np.ascontiguousarray(arrays["traj"]))
-        if "image" in self.modalities:
-            self.tensors["image"] = torch.from_numpy(np.ascontiguousarray(arrays["image"]))
-        if "label" in self.modalities:
-            self.tensors["label"] = torch.from_numpy(arrays["label"].astype(np.int64))
-        self.length = len(arrays["label"])
+        self.tensors = {m: MODALITIES[m].load(arrays[m]) for m in self.modalities}
+        self.length = len(arrays[LABEL])  # every split holds the class of each sample
 
     def __len__(self) -> int:
         return self.length
 
     def _gather(self, index) -> dict[str, torch.Tensor]:
-        batch = {k: v[index] for k, v in self.tensors.items()}
-        if "image" in batch:  # uint8 (.., 28, 28) -> float (.., 1, 28, 28) in [0, 1]
-            batch["image"] = batch["image"].unsqueeze(-3).float().div_(255.0)
-        return batch
+        return {m: MODALITIES[m].prepare(v[index]) for m, v in self.tensors.items()}
 
     def __getitem__(self, index: int) -> dict[str, torch.Tensor]:
         return self._gather(index)
@@ -78,23 +71,15 @@ def read_manifest(root: str | Path) -> dict[str, Any]:
 
 
 def check_model_shapes(arrays: dict[str, np.ndarray], path: str | Path) -> None:
-    """Refuse a split whose trajectories or images do not have the shapes the models take
-    (``n_points`` = 100 points, 28 x 28 images: ``prg.models.components``), naming both."""
-    from prg.models.components import IMAGE_SHAPE, TRAJ_DIM
-
-    n_points, size = TRAJ_DIM // 2, IMAGE_SHAPE[-1]
-    traj, image = arrays.get("traj"), arrays.get("image")
+    """Refuse a split whose samples do not have the shapes the models take (each modality's
+    ``stored_shape`` in :data:`prg.modalities.MODALITIES`: 100 trajectory points, 28 x 28
+    images), naming the ``prg-prepare`` options that set them, as prepared and as needed."""
     wrong = []
-    if traj is not None and (traj.ndim != 2 or traj.shape[1] != TRAJ_DIM):
-        got = traj.shape[1] // 2 if traj.ndim == 2 else traj.shape
-        wrong.append(("data.preprocess.n_points", got, n_points))
-    if image is not None and (image.ndim != 3 or image.shape[1:] != (size, size)):
-        got = (
-            image.shape[1]
-            if image.ndim == 3 and image.shape[1] == image.shape[2]
-            else image.shape[1:]
-        )
-        wrong.append(("data.image.size", got, size))
+    for spec in MODALITIES.values():
+        array, option = arrays.get(spec.name), spec.shape_option
+        if option is None or array is None or array.shape[1:] == spec.stored_shape:
+            continue
+        wrong.append((option.key, option.value(array.shape), option.value((0, *spec.stored_shape))))
     if wrong:
         has = " and ".join(f"{key}={got}" for key, got, _ in wrong)
         needs = " and ".join(f"{key}={want}" for key, _, want in wrong)
@@ -115,8 +100,10 @@ class PRGDataModule(L.LightningDataModule):
     name : str
         Prepared dataset name (``data.name``).
     modalities : sequence of str
-        Any non-empty subset of ``("traj", "image", "label")``; batches hold only these keys:
-        ``traj`` float (B, 200), ``image`` float (B, 1, 28, 28) in [0, 1], ``label`` long (B,).
+        Any non-empty subset of :data:`prg.modalities.NAMES` (``traj``, ``label``, ``image``);
+        batches hold only these keys, each a model input of its modality's ``shape`` and
+        ``dtype``: ``traj`` float (B, 200), ``label`` long (B,), ``image`` float (B, 1, 28, 28)
+        in [0, 1].
     batch_size, num_workers, pin_memory : loader settings
     seed : int
         Seeds the training shuffle.
@@ -126,7 +113,7 @@ class PRGDataModule(L.LightningDataModule):
         self,
         data_dir: str | Path,
         name: str,
-        modalities: Sequence[str] = MODALITIES,
+        modalities: Sequence[str] = NAMES,
         batch_size: int = 128,
         eval_batch_size: int | None = None,
         num_workers: int = 0,
@@ -139,7 +126,7 @@ class PRGDataModule(L.LightningDataModule):
         if unknown or not modalities:
             raise UsageError(
                 f"modalities {list(modalities)} not accepted: choose a non-empty subset of "
-                f"{list(MODALITIES)}"
+                f"{list(NAMES)}"
             )
         if batch_size < 1 or num_workers < 0:
             raise UsageError(
@@ -167,7 +154,7 @@ class PRGDataModule(L.LightningDataModule):
                 path = self.root / f"{split}.npz"
                 arrays = load_split(path)
                 check_model_shapes(arrays, self.root)
-                if len(arrays["label"]) == 0:
+                if len(arrays[LABEL]) == 0:
                     raise UsageError(
                         f"dataset split {path} is empty: the {split} split needs writers "
                         f"(data.splits.{split} > 0 when the dataset is prepared)"

@@ -17,6 +17,7 @@ lowercase letters (and digits) are the same shape; :data:`SHAPE_TWINS` groups th
 from __future__ import annotations
 
 import copy
+import dataclasses
 import hashlib
 import io
 import json
@@ -36,10 +37,11 @@ from prg.data.alphabet import ALPHABET, NUM_CLASSES
 from prg.data.store import load_split
 from prg.errors import UsageError
 from prg.files import write_bytes, write_json
+from prg.modalities import LABEL
+from prg.modalities import MODALITIES as REGISTRY
 
 log = logging.getLogger(__name__)
 
-MODALITIES: tuple[str, ...] = ("traj", "image")
 FORMAT = "prg-classifier"
 FORMAT_VERSION = 1
 CFG_KEYS: tuple[str, ...] = ("epochs", "batch_size", "lr", "seed")
@@ -139,7 +141,18 @@ class ImageClassifier(nn.Module):
         return self.head(self.features(x))
 
 
-CLASSIFIERS: dict[str, type[nn.Module]] = {"traj": TrajectoryClassifier, "image": ImageClassifier}
+NETWORKS: dict[str, type[nn.Module]] = {"points": TrajectoryClassifier, "pixels": ImageClassifier}
+"""The classifier network of each kind of modality (:data:`prg.modalities.KINDS`; a class label
+needs none: its most probable class is read directly)."""
+
+CLASSIFIERS: dict[str, type[nn.Module]] = {
+    m.name: NETWORKS[m.kind] for m in REGISTRY.values() if m.kind in NETWORKS
+}
+"""Modality -> its classifier: ``traj`` :class:`TrajectoryClassifier`, ``image``
+:class:`ImageClassifier`."""
+
+MODALITIES: tuple[str, ...] = tuple(CLASSIFIERS)
+"""The modalities with a classifier, in the paper's order: ``("traj", "image")``."""
 
 
 def _check_modality(modality: str) -> None:
@@ -148,16 +161,14 @@ def _check_modality(modality: str) -> None:
 
 
 def to_input(modality: str, array: np.ndarray | torch.Tensor) -> torch.Tensor:
-    """Split array -> classifier input.
+    """Split array -> classifier input, the models' input of the modality
+    (:meth:`prg.modalities.Modality.to_tensor`).
 
     ``traj`` float (N, 200) -> float32 (N, 200); ``image`` uint8 (N, 28, 28) -> float32
     (N, 1, 28, 28) in [0, 1] (ink / 255).
     """
     _check_modality(modality)
-    x = torch.as_tensor(np.asarray(array))
-    if modality == "image":
-        return x.float().div(255.0).unsqueeze(1)
-    return x.float()
+    return REGISTRY[modality].to_tensor(array)
 
 
 # -- prediction and scores --------------------------------------------------------------------
@@ -218,7 +229,7 @@ def train_classifier(
 
     Parameters
     ----------
-    modality : {"traj", "image"}
+    modality : one of :data:`MODALITIES` ("traj", "image")
     train_arrays, val_arrays : mapping
         Split arrays (:func:`prg.data.store.load_split`) with ``modality`` and ``label``.
     epochs, batch_size : int
@@ -244,9 +255,9 @@ def train_classifier(
     if not lr > 0:
         raise UsageError(f"classifier lr must be > 0, got {lr!r}")
     x = to_input(modality, train_arrays[modality])
-    y = torch.as_tensor(np.asarray(train_arrays["label"], dtype=np.int64))
+    y = torch.as_tensor(np.asarray(train_arrays[LABEL], dtype=np.int64))
     x_val = to_input(modality, val_arrays[modality])
-    y_val = np.asarray(val_arrays["label"])
+    y_val = np.asarray(val_arrays[LABEL])
     if len(x) == 0 or len(x_val) == 0:
         raise UsageError("a classifier needs training and validation samples: a split is empty")
     start = time.perf_counter()
@@ -385,8 +396,8 @@ def data_fingerprint(data_dir: str | os.PathLike) -> str:
     return hashlib.sha256(json.dumps(manifest, sort_keys=True).encode()).hexdigest()
 
 
-def _check_cfg(cfg: Mapping[str, Any]) -> dict[str, Any]:
-    cfg = dict(cfg)
+def _check_cfg(cfg: Any) -> dict[str, Any]:
+    cfg = dataclasses.asdict(cfg) if dataclasses.is_dataclass(cfg) else dict(cfg)
     if set(cfg) != set(CFG_KEYS):
         raise UsageError(
             f"classifier config has keys {sorted(cfg)}: expected exactly {sorted(CFG_KEYS)}"
@@ -425,10 +436,11 @@ def _reusable(
 def ensure_classifiers(
     data_dir: str | os.PathLike,
     out_dir: str | os.PathLike,
-    cfg: Mapping[str, Any] | None = None,
+    cfg: Any = None,
     progress: bool = True,
 ) -> dict[str, nn.Module]:
-    """Load, or train and save, the traj and image classifiers of a prepared dataset.
+    """Load, or train and save, the classifiers (:data:`MODALITIES`: traj and image) of a
+    prepared dataset.
 
     ``<out_dir>/<modality>.pt`` is reused when its meta's data fingerprint equals
     :func:`data_fingerprint` of ``data_dir``, its cfg equals ``cfg`` and its twin table equals
@@ -444,7 +456,7 @@ def ensure_classifiers(
         A prepared dataset folder (``<paths.data_dir>/prepared/<name>``).
     out_dir : path
         Where the classifier files and ``metrics.json`` go.
-    cfg : mapping, optional
+    cfg : mapping or :class:`~prg.evaluation.settings.ClassifierSettings`, optional
         ``epochs``, ``batch_size``, ``lr``, ``seed`` (:func:`train_classifier`), used for both
         modalities. Default :data:`DEFAULT_CFG`.
     progress : bool
@@ -477,7 +489,7 @@ def ensure_classifiers(
             test = split("test")
             real = ~test["augmented"]
             pred = predict(model, to_input(modality, test[modality][real])).numpy()
-            labels = test["label"][real]
+            labels = test[LABEL][real]
             meta = {
                 "modality": modality,
                 "data_fingerprint": fingerprint,
@@ -486,7 +498,7 @@ def ensure_classifiers(
                 "test_folded_accuracy": folded_accuracy(pred, labels),
                 "val_accuracy": history["best_val_accuracy"],
                 "best_epoch": history["best_epoch"],
-                "n_train": len(split("train")["label"]),
+                "n_train": len(split("train")[LABEL]),
                 "n_test": int(real.sum()),
                 "epochs": settings["epochs"],
                 "train_seconds": round(history["seconds"], 2),

@@ -22,6 +22,7 @@ import torch
 from torch import nn
 
 from prg.evaluation.classifiers import FOLD, predict
+from prg.modalities import MODALITIES
 from prg.models.base import Inputs, MultimodalVAE
 
 
@@ -43,14 +44,14 @@ def generated_classes(
     seed: int = 0,
     impute_steps: int = 0,
 ) -> torch.Tensor:
-    """Class assigned to each generated ``target`` sample (shape (N,), long)."""
-    out = torch.empty(len(data["label"]), dtype=torch.long)
+    """Class assigned to each generated ``target`` sample (shape (N,), long): a generated label's
+    most probable class, the classifier's (``classifiers[target]``) for anything else."""
+    out = torch.empty(samples(data), dtype=torch.long)
+    is_class = MODALITIES[target].kind == "class"
     for rows, generated in _generated_batches(
         model, target, given, data, temperature, batch_size, seed, impute_steps
     ):
-        out[rows] = (
-            generated.argmax(-1) if target == "label" else predict(classifiers[target], generated)
-        )
+        out[rows] = generated.argmax(-1) if is_class else predict(classifiers[target], generated)
     return out
 
 
@@ -77,9 +78,14 @@ def generated_samples(
     )
 
 
+def samples(data: Inputs) -> int:
+    """How many samples ``data`` (full-split tensors, one per modality) holds."""
+    return len(next(iter(data.values())))
+
+
 def _generated_batches(model, target, given, data, temperature, batch_size, seed, impute_steps):
     torch.manual_seed(seed)  # generate() draws latents from the global generator
-    n = len(data["label"])
+    n = samples(data)
     for start in range(0, n, batch_size):
         rows = slice(start, start + batch_size)
         generated = model.generate(

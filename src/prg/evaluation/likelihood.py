@@ -26,7 +26,8 @@ from collections.abc import Sequence
 import torch
 
 from prg.errors import UsageError
-from prg.models.base import LETTER, Gaussian, ImportancePath, Inputs, MultimodalVAE
+from prg.modalities import IMAGE, LABEL, LETTER, TRAJ
+from prg.models.base import Gaussian, ImportancePath, Inputs, MultimodalVAE
 from prg.models.likelihoods import Likelihoods
 
 _LOG_2PI = math.log(2 * math.pi)
@@ -68,22 +69,26 @@ def density_convention(traj_std: float | None = PAPER_TRAJ_STD) -> str:
 
 DENSITY_CONVENTION = density_convention()
 
-# Table I of the paper: name -> (target, given modalities)
-TABLE1_CELLS: dict[str, tuple[str, tuple[str, ...]]] = {
-    "logp_T": ("traj", ()),
-    "logp_S": ("label", ()),
-    "logp_I": ("image", ()),
-    "logp_T_given_S": ("traj", ("label",)),
-    "logp_T_given_I": ("traj", ("image",)),
-    "logp_S_given_T": ("label", ("traj",)),
-    "logp_I_given_T": ("image", ("traj",)),
-}
-
 
 def cell_name(target: str, given: tuple[str, ...], prefix: str = "logp") -> str:
     """``logp_T_given_S``-style name of ``log p(x_target | x_given)``."""
     name = f"{prefix}_{LETTER[target]}"
     return name + (f"_given_{''.join(LETTER[m] for m in given)}" if given else "")
+
+
+# Table I of the paper: name (logp_T, logp_T_given_S ...) -> (target, given modalities)
+TABLE1_CELLS: dict[str, tuple[str, tuple[str, ...]]] = {
+    cell_name(target, given): (target, given)
+    for target, given in [
+        (TRAJ, ()),
+        (LABEL, ()),
+        (IMAGE, ()),
+        (TRAJ, (LABEL,)),
+        (TRAJ, (IMAGE,)),
+        (LABEL, (TRAJ,)),
+        (IMAGE, (TRAJ,)),
+    ]
+}
 
 
 def standard_normal_log_prob(z: torch.Tensor) -> torch.Tensor:

@@ -1,7 +1,8 @@
 """Report tables of an evaluation: Table I (with the paper's values), coherence (exact and with
 shape twins folded), smoothness of decoded letters, robustness.
 
-Pure functions from result rows (lists of dicts) to CSV/Markdown text; the caller writes them.
+Pure functions from result rows (lists of dicts) to CSV/Markdown text; :func:`report_texts`
+gives every report file of an :class:`~prg.evaluation.run.Evaluation`; the caller writes them.
 """
 
 from __future__ import annotations
@@ -9,7 +10,9 @@ from __future__ import annotations
 import csv
 import io
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 from prg.evaluation.classifiers import SHAPE_TWINS
 from prg.evaluation.likelihood import (
@@ -18,8 +21,11 @@ from prg.evaluation.likelihood import (
     TABLE1_CELLS,
     density_convention,
 )
-from prg.models.base import LETTER
-from prg.models.likelihoods import MODALITIES
+from prg.modalities import LETTER, NAMES, TRAJ, letters
+
+if TYPE_CHECKING:
+    from prg.evaluation.run import Evaluation
+    from prg.evaluation.settings import EvaluationSettings
 
 FAMILY_TITLES = {
     "cvae": "PRG_CVAE(T,S)",
@@ -89,13 +95,38 @@ ROUGHNESS_DEFINITION = (
 )
 
 
+TABLE1_COLUMNS = (
+    "model",
+    "family",
+    "cell",
+    "value",
+    "sem",
+    "paper",
+    "traj_std",
+    "k",
+    "n_test",
+    "seconds",
+)
+COHERENCE_COLUMNS = (
+    "model",
+    "family",
+    "target",
+    "given",
+    "kind",
+    "temperature",
+    "coherence",
+    "coherence_folded",
+    "n",
+)
+
+
 def title(family: str) -> str:
     return FAMILY_TITLES.get(family, family)
 
 
 def subset_name(given: Sequence[str]) -> str:
     """('label', 'image') -> 'S,I' (the paper's letters, in T, S, I order)."""
-    return ",".join(LETTER[m] for m in MODALITIES if m in given)
+    return letters(given, ",")
 
 
 def to_csv(rows: list[dict], columns: Sequence[str]) -> str:
@@ -155,7 +186,7 @@ def table1_markdown(rows: list[dict], setup: str, traj_std: float | None = PAPER
         + "; the paper's values in parentheses.",
         _md_table(header, body),
     ]
-    traj_cells = [c for c, (target, _) in TABLE1_CELLS.items() if target == "traj"]
+    traj_cells = [c for c, (target, _) in TABLE1_CELLS.items() if target == TRAJ]
     own = [
         [
             _row_title(name, families[name]),
@@ -267,15 +298,18 @@ def _classifier_lines(info: dict) -> str:
     return "\n".join(lines)
 
 
+_LETTERS = [LETTER[m] for m in NAMES]  # T, S, I
+
+
 def _subset_order(subset: str) -> tuple:
     """Cross-modal subsets first, then those holding T; smaller first; T, S, I order."""
-    letters = subset.split(",")
-    return ("T" in letters, len(letters), ["TSI".index(c) for c in letters])
+    given = subset.split(",")
+    return (LETTER[TRAJ] in given, len(given), [_LETTERS.index(c) for c in given])
 
 
 def robustness_markdown(rows: list[dict], kind: str, setup: str) -> str:
     """Trajectory coherence for every input subset each model accepts (missing modalities)."""
-    traj = [r for r in rows if r["target"] == "traj" and r["kind"] == kind]
+    traj = [r for r in rows if r["target"] == TRAJ and r["kind"] == kind]
     subsets = sorted(dict.fromkeys(r["given"] for r in traj), key=_subset_order)
     value = {(r["model"], r["given"]): r for r in traj}
     body = []
@@ -285,7 +319,10 @@ def robustness_markdown(rows: list[dict], kind: str, setup: str) -> str:
             [title(family) if name == family else name]
             + [_exact_folded(value.get((name, s))) for s in subsets]
         )
-    header = ["model", *[f"{{{s}}}" + ("*" if "T" in s.split(",") else "") for s in subsets]]
+    header = [
+        "model",
+        *[f"{{{s}}}" + ("*" if LETTER[TRAJ] in s.split(",") else "") for s in subsets],
+    ]
     return (
         "\n\n".join(
             [
@@ -307,3 +344,47 @@ def _exact_folded(row: dict | None) -> str:
     if row.get("coherence_folded") is None:
         return f"{row['coherence']:.3f}"
     return f"{row['coherence']:.3f} ({row['coherence_folded']:.3f})"
+
+
+def setup_line(
+    part: str, settings: EvaluationSettings, checkpoints: Mapping[str, Path], data_name: str
+) -> str:
+    """The line under a report's title: data, settings of ``part`` (``likelihood`` or
+    ``coherence``), seed and checkpoints."""
+    lk = settings.likelihood
+    ckpts = ", ".join(f"{n}: {p}" for n, p in checkpoints.items())
+    if part == "likelihood":
+        n = lk.n_test if lk.n_test is not None else "all"
+        std = "each model's own" if lk.traj_std is None else f"{lk.traj_std:g}"
+        what = (
+            f"K = {lk.k_marginal} (marginals) / {lk.k_conditional} (conditionals), "
+            f"test samples: {n}, trajectory std: {std} (second table: each model's own)"
+        )
+    else:
+        what = f"test samples: {settings.n_test if settings.n_test is not None else 'all'}"
+    return f"Data: {data_name} test split; {what}; seed {settings.seed}. Checkpoints: {ckpts}."
+
+
+def report_texts(
+    result: Evaluation,
+    settings: EvaluationSettings,
+    checkpoints: Mapping[str, Path],
+    data_name: str,
+) -> dict[str, str]:
+    """File name -> text of every report of the evaluated parts: ``table1.{csv,md}`` (likelihood),
+    ``coherence.{csv,md}`` and ``robustness.md`` (coherence; robustness for the first
+    generation kind). ``checkpoints``: model name -> checkpoint path, for the setup lines."""
+    texts = {}
+    if "likelihood" in settings.parts:
+        setup = setup_line("likelihood", settings, checkpoints, data_name)
+        texts["table1.csv"] = to_csv(result.table1, TABLE1_COLUMNS)
+        texts["table1.md"] = table1_markdown(result.table1, setup, settings.likelihood.traj_std)
+    if "coherence" in settings.parts:
+        setup = setup_line("coherence", settings, checkpoints, data_name)
+        texts["coherence.csv"] = to_csv(result.coherence, COHERENCE_COLUMNS)
+        texts["coherence.md"] = coherence_markdown(
+            result.coherence, result.classifiers, setup, result.smoothness
+        )
+        kind = next(iter(settings.coherence.temperatures))
+        texts["robustness.md"] = robustness_markdown(result.coherence, kind, setup)
+    return texts

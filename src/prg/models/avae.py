@@ -15,8 +15,8 @@ from itertools import combinations
 import torch
 from torch import nn
 
+from prg.modalities import MODALITIES
 from prg.models.base import Gaussian, ImportancePath, Inputs, MultimodalVAE
-from prg.models.components import DECODERS, ENCODERS
 from prg.models.fusion import kl_standard_normal, reparameterise, symmetric_kl
 
 
@@ -34,13 +34,16 @@ class AVAE(MultimodalVAE):
         super().__init__(tuple(modalities), latent_dim, traj_std)
         if len(self.modalities) < 2:
             raise ValueError("an AVAE needs at least two modalities")
-        self.family = "avae_" + "".join(
-            {"traj": "t", "label": "s", "image": "i"}[m] for m in self.modalities
-        )
+        # avae_ts, avae_ti: the paper's letters of its modalities
+        self.family = "avae_" + "".join(MODALITIES[m].letter.lower() for m in self.modalities)
         self.alpha = alpha
         self.weights = {m: float((weights or {}).get(m, 1.0)) for m in self.modalities}
-        self.encoders = nn.ModuleDict({m: ENCODERS[m](latent_dim) for m in self.modalities})
-        self.decoders = nn.ModuleDict({m: DECODERS[m](latent_dim) for m in self.modalities})
+        self.encoders = nn.ModuleDict(
+            {m: MODALITIES[m].encoder(latent_dim) for m in self.modalities}
+        )
+        self.decoders = nn.ModuleDict(
+            {m: MODALITIES[m].decoder(latent_dim) for m in self.modalities}
+        )
 
     @property
     def accepted_inputs(self) -> list[tuple[str, ...]]:

@@ -1,7 +1,7 @@
 """One interface for every multimodal VAE family (CVAE, AVAE, MUSE).
 
-Batches and inputs are dicts keyed by modality (``traj`` (B, 200), ``label`` (B,) long,
-``image`` (B, 1, 28, 28)); a missing modality is simply absent.
+Batches and inputs are dicts keyed by modality (:data:`prg.modalities.MODALITIES`: ``traj``
+(B, 200), ``label`` (B,) long, ``image`` (B, 1, 28, 28)); a missing modality is simply absent.
 
 - :meth:`MultimodalVAE.encode` — posterior over the family's generative latent from any input
   subset the family supports (a clear :class:`~prg.errors.UsageError` otherwise);
@@ -26,11 +26,13 @@ import torch
 from torch import nn
 
 from prg.errors import UsageError
+from prg.modalities import LETTER, MODALITIES, NAMES, in_order
 from prg.models.fusion import reparameterise
-from prg.models.likelihoods import MODALITIES, Likelihoods
+from prg.models.likelihoods import Likelihoods
+
+__all__ = ["LETTER", "MODALITIES", "Gaussian", "ImportancePath", "Inputs", "MultimodalVAE"]
 
 Inputs = dict[str, torch.Tensor]
-LETTER = {"traj": "T", "label": "S", "image": "I"}  # the paper's names
 _LOG_2PI = math.log(2 * math.pi)
 
 
@@ -75,7 +77,7 @@ class MultimodalVAE(nn.Module, ABC):
         super().__init__()
         unknown = [m for m in modalities if m not in MODALITIES]
         if unknown:
-            raise UsageError(f"unknown modalities {unknown}: accepted are {list(MODALITIES)}")
+            raise UsageError(f"unknown modalities {unknown}: accepted are {list(NAMES)}")
         self.modalities = tuple(modalities)
         self.latent_dim = latent_dim
         self.likelihoods = Likelihoods(traj_std=traj_std)
@@ -123,7 +125,7 @@ class MultimodalVAE(nn.Module, ABC):
 
     def check_cell(self, target: str, given: Inputs) -> None:
         """Raise a UsageError unless ``log p(x_target | given)`` is one of this family's cells."""
-        cell = (target, tuple(m for m in MODALITIES if m in given))
+        cell = (target, in_order(given))
         if cell not in self.likelihood_cells:
 
             def name(t, g):
@@ -142,7 +144,7 @@ class MultimodalVAE(nn.Module, ABC):
     def check_inputs(self, inputs: Inputs) -> None:
         """Raise a UsageError naming what was given and what this family accepts."""
         if not self.accepts(inputs):
-            given = [m for m in MODALITIES if m in inputs] or list(inputs)
+            given = list(in_order(inputs)) or list(inputs)
             accepted = " or ".join("{" + ", ".join(s) + "}" for s in self.accepted_inputs)
             raise UsageError(
                 f"{self.family} cannot encode inputs {{{', '.join(given) or 'nothing'}}}: "

@@ -6,7 +6,8 @@ parameters of the modality's likelihood (:mod:`prg.models.likelihoods`): the tra
 (200 values), label logits (62), image logits (1 x 28 x 28). LeakyReLU throughout (slope 0.01,
 PyTorch's default). The tables list a LeakyReLU after the image decoder's last transposed
 convolution; it is left out here because that layer's outputs are the Bernoulli logits, which
-must range over all reals.
+must range over all reals. Which network serves which modality is the registry's
+(:data:`prg.modalities.MODALITIES`: ``encoder``, ``decoder``).
 """
 
 from __future__ import annotations
@@ -148,7 +149,3 @@ class ImageDecoder(nn.Module):
 
     def forward(self, z: torch.Tensor) -> torch.Tensor:
         return self.deconv(self.fc(z).view(-1, 256, 3, 3))
-
-
-ENCODERS = {"traj": TrajectoryEncoder, "label": LabelEncoder, "image": ImageEncoder}
-DECODERS = {"traj": TrajectoryDecoder, "label": LabelDecoder, "image": ImageDecoder}

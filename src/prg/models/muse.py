@@ -32,8 +32,9 @@ from itertools import combinations
 import torch
 from torch import nn
 
+from prg.modalities import MODALITIES
 from prg.models.base import Gaussian, ImportancePath, Inputs, MultimodalVAE
-from prg.models.components import DECODERS, ENCODERS, GaussianHead, mlp
+from prg.models.components import GaussianHead, mlp
 from prg.models.fusion import kl_standard_normal, product_of_experts, reparameterise, symmetric_kl
 
 
@@ -72,19 +73,23 @@ class MUSE(MultimodalVAE):
         super().__init__(tuple(modalities), latent_dim, traj_std)
         if len(self.modalities) < 2:
             raise ValueError("MUSE needs at least two modalities")
-        default_lambda = {"traj": 1.0, "label": 50.0, "image": 1.0}
+        default_lambda = {"traj": 1.0, "label": 50.0, "image": 1.0}  # the paper's; others 1
 
         def weights(given, default):
             return {m: float((given or {}).get(m, default(m))) for m in self.modalities}
 
-        self.lambdas = weights(lambdas, lambda m: default_lambda[m])
+        self.lambdas = weights(lambdas, lambda m: default_lambda.get(m, 1.0))
         self.alphas = weights(alphas, lambda m: 1.0)
         self.gammas = weights(gammas, lambda m: 10.0)
         self.beta, self.delta = beta, delta
         self.top_scale = 1.0  # the training loop's warm-up of the top-level regularisers
         self.top_latent_dim = top_latent_dim
-        self.encoders = nn.ModuleDict({m: ENCODERS[m](latent_dim) for m in self.modalities})
-        self.decoders = nn.ModuleDict({m: DECODERS[m](latent_dim) for m in self.modalities})
+        self.encoders = nn.ModuleDict(
+            {m: MODALITIES[m].encoder(latent_dim) for m in self.modalities}
+        )
+        self.decoders = nn.ModuleDict(
+            {m: MODALITIES[m].decoder(latent_dim) for m in self.modalities}
+        )
         self.top_experts = nn.ModuleDict(
             {m: TopExpert(latent_dim, top_latent_dim) for m in self.modalities}
         )
@@ -132,10 +137,8 @@ class MUSE(MultimodalVAE):
         posterior = self.top_posterior(given)
         for _ in range(steps):
             codes = dict(given)
-            for m in missing:
-                imputed = self.likelihoods.mean(m, self.decode(posterior.mu, m))
-                if m == "label":
-                    imputed = imputed.argmax(-1)
+            for m in missing:  # the decoded mean as an input (a label: its most probable class)
+                imputed = self.likelihoods.as_input(m, self.decode(posterior.mu, m))
                 codes[m] = self.encoders[m](imputed)[0]
             posterior = self.top_posterior(codes)
         return posterior

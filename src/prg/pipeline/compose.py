@@ -13,9 +13,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from prg.checks import GENERATE_RANGES, check_fields, check_text_length
+from prg.checks import GENERATE_RANGES, check_text_length
 from prg.data.alphabet import text_to_labels, unsupported_chars
 from prg.errors import SettingsError, UsageError
+from prg.fields import check_ranges
 from prg.pipeline.connect import ConnectionSettings, connect_sequence
 from prg.pipeline.dmp import basis_count, fit_dmp, rollout
 from prg.pipeline.layout import LayoutSettings, layout_letters, word_breaks
@@ -59,7 +60,7 @@ class GenerateSettings:
     connection: ConnectionSettings = field(default_factory=ConnectionSettings)
 
     def __post_init__(self) -> None:
-        check_fields(self, GENERATE_RANGES)
+        check_ranges(self, GENERATE_RANGES)
         if self.method not in CONNECTION_METHODS:
             raise SettingsError("method", f"{self.method!r}: choose alg1 or straight")
 

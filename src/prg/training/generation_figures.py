@@ -6,6 +6,7 @@ import numpy as np
 import torch
 
 from prg.data.alphabet import ALPHABET, NUM_CLASSES
+from prg.modalities import IMAGE, LABEL, MODALITIES, TRAJ
 from prg.models.base import MultimodalVAE
 from prg.plotting import pyplot
 
@@ -32,7 +33,7 @@ def _draw_trajectory(ax, traj: np.ndarray) -> None:
 
 
 def _draw_image(ax, image: np.ndarray) -> None:
-    ax.imshow(image.reshape(28, 28), cmap="gray_r", vmin=0, vmax=1)
+    ax.imshow(image.reshape(image.shape[-2:]), cmap="gray_r", vmin=0, vmax=1)
 
 
 def trajectory_grid(trajs: np.ndarray, titles: list[str], cols: int = 16, title: str = ""):
@@ -45,54 +46,59 @@ def image_grid(images: np.ndarray, titles: list[str], cols: int = 16, title: str
     return _grid(images, titles, cols, title, (0.6, 0.7), _draw_image)
 
 
+GRIDS = {"points": trajectory_grid, "pixels": image_grid}
+"""The grid figure of each kind of modality (:data:`prg.modalities.KINDS`; class labels are shown
+as the titles of others)."""
+
+
+def grid_of(modality: str):
+    """The function that draws samples of ``modality`` in a grid (:data:`GRIDS`), or None."""
+    return GRIDS.get(MODALITIES[modality].kind)
+
+
 @torch.no_grad()
 def generation_figures(model: MultimodalVAE, batch: dict[str, torch.Tensor]) -> dict:
     """Figures for a family: ``recon_<modality>``, ``label_to_traj`` (62 classes),
     ``image_to_traj``, ``traj_to_image`` — each only where the family supports it."""
     figures = {}
     n = len(next(iter(batch.values())))
-    names = (
-        [ALPHABET[int(y)] for y in batch["label"]] if "label" in batch else list(map(str, range(n)))
-    )
+    names = [ALPHABET[int(y)] for y in batch[LABEL]] if LABEL in batch else list(map(str, range(n)))
     for m in model.generated_modalities:
         given = {m: batch[m]} if model.accepts({m: batch[m]}) else dict(batch)
         out = model.generate(given, m)[0].cpu().numpy()
-        if m == "traj":
-            both = np.concatenate([batch["traj"].cpu().numpy(), out])
-            figures["recon_traj"] = trajectory_grid(
-                both, names * 2, cols=n, title="trajectories: data (top), reconstruction"
+        grid = grid_of(m)
+        if grid is not None:
+            both = np.concatenate([batch[m].cpu().numpy(), out])
+            figures[f"recon_{m}"] = grid(
+                both, names * 2, cols=n, title=f"{MODALITIES[m].plural}: data (top), reconstruction"
             )
-        elif m == "image":
-            both = np.concatenate([batch["image"].cpu().numpy(), out])
-            figures["recon_image"] = image_grid(
-                both, names * 2, cols=n, title="images: data (top), reconstruction"
-            )
-        elif m == "label" and "traj" in batch:
+        elif m == LABEL and TRAJ in batch:
             predicted = [ALPHABET[i] for i in out.argmax(-1)]
             figures["recon_label"] = trajectory_grid(
-                batch["traj"].cpu().numpy(),
+                batch[TRAJ].cpu().numpy(),
                 [f"{a}->{b}" for a, b in zip(names, predicted)],
                 cols=n,
                 title="labels: data -> reconstruction",
             )
+    # the paper's cross-modal generations: a letter of each class, images <-> trajectories
     device = next(model.parameters()).device
     if (
-        "label" in batch
-        and model.accepts({"label": batch["label"]})
-        and "traj" in model.generated_modalities
+        LABEL in batch
+        and model.accepts({LABEL: batch[LABEL]})
+        and TRAJ in model.generated_modalities
     ):
-        every = {"label": torch.arange(NUM_CLASSES, device=device)}
-        out = model.generate(every, "traj")[0].cpu().numpy()
+        every = {LABEL: torch.arange(NUM_CLASSES, device=device)}
+        out = model.generate(every, TRAJ)[0].cpu().numpy()
         figures["label_to_traj"] = trajectory_grid(
             out, list(ALPHABET), title="label -> trajectory (posterior mean), all 62 classes"
         )
     if (
-        {"image", "traj"} <= set(batch)
-        and model.accepts({"image": batch["image"]})
-        and model.accepts({"traj": batch["traj"]})
+        {IMAGE, TRAJ} <= set(batch)
+        and model.accepts({IMAGE: batch[IMAGE]})
+        and model.accepts({TRAJ: batch[TRAJ]})
     ):
-        out = model.generate({"image": batch["image"]}, "traj")[0].cpu().numpy()
+        out = model.generate({IMAGE: batch[IMAGE]}, TRAJ)[0].cpu().numpy()
         figures["image_to_traj"] = trajectory_grid(out, names, cols=n, title="image -> trajectory")
-        out = model.generate({"traj": batch["traj"]}, "image")[0].cpu().numpy()
+        out = model.generate({TRAJ: batch[TRAJ]}, IMAGE)[0].cpu().numpy()
         figures["traj_to_image"] = image_grid(out, names, cols=n, title="trajectory -> image")
     return figures
