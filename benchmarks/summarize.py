@@ -444,7 +444,7 @@ def _legacy_table1(evaluate: dict) -> bool:
 def table1_markdown(evaluate: dict, models: dict[str, dict]) -> str:
     """Table I in the paper's convention (unit-variance trajectory Gaussian, the paper's values
     in parentheses) and the trajectory cells under each model's own std."""
-    from prg.evaluation.reports import PAPER_TABLE1
+    from prg.evaluation.likelihood import PAPER_TABLE1
 
     legacy = _legacy_table1(evaluate)
 

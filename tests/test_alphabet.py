@@ -1,6 +1,6 @@
 import pytest
 
-from prg.data.alphabet import (
+from prg.alphabet import (
     ALPHABET,
     NUM_CLASSES,
     char_to_label,

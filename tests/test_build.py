@@ -183,7 +183,7 @@ def _case_twins(a: str, b: str) -> bool:
 def test_augmented_letters_are_still_recognisable(small_dataset):
     """1-nearest-neighbour fitted on the originals labels >= 90 % of augmented samples right
     (62 classes; case twins such as o/O, whose normalised shapes coincide, count as right)."""
-    from prg.data.alphabet import ALPHABET
+    from prg.alphabet import ALPHABET
 
     train = load_split(small_dataset / "prepared/synthetic/train.npz")
     originals = ~train["augmented"]

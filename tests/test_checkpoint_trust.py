@@ -85,7 +85,14 @@ def test_prg_write_refuses_a_hostile_checkpoint_in_one_line_and_creates_nothing(
     ckpt = tmp_path / "evil.ckpt"
     _hostile_pickle(ckpt, marker)
     result = subprocess.run(
-        [sys.executable, "-m", "prg.commands.write", "text=cat", f"ckpt={ckpt}", f"out_dir={tmp_path}/o"],
+        [
+            sys.executable,
+            "-m",
+            "prg.commands.write",
+            "text=cat",
+            f"ckpt={ckpt}",
+            f"out_dir={tmp_path}/o",
+        ],
         cwd=tmp_path,
         capture_output=True,
         text=True,

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import torch
 
-from prg.data.alphabet import ALPHABET, NUM_CLASSES
+from prg.alphabet import ALPHABET, NUM_CLASSES
 from prg.data.store import load_split
 from prg.errors import UsageError
 from prg.evaluation import classifiers as clf

@@ -16,8 +16,7 @@ from prg.commands.evaluate import dataset_dir, evaluate
 from prg.commands.train import train
 from prg.evaluation.classifiers import FOLD, load_classifier, predict
 from prg.evaluation.coherence import coherence_cells, per_class_rate
-from prg.evaluation.likelihood import MODEL_STD_SUFFIX, TABLE1_CELLS, estimate_cell
-from prg.evaluation.reports import PAPER_TABLE1
+from prg.evaluation.likelihood import MODEL_STD_SUFFIX, PAPER_TABLE1, TABLE1_CELLS, estimate_cell
 from prg.evaluation.run import load_test_data, subset
 from prg.evaluation.smoothness import median_roughness
 from prg.models.checkpoint import load_model

@@ -122,7 +122,7 @@ def _probabilities(first: str, second: str) -> "torch.Tensor":
     most probable spell ``second`` (0.5 and 0.3, the rest spread over the other classes)."""
     import torch
 
-    from prg.data.alphabet import NUM_CLASSES, char_to_label
+    from prg.alphabet import NUM_CLASSES, char_to_label
 
     probs = torch.full((len(first), NUM_CLASSES), 0.2 / (NUM_CLASSES - 2))
     for i, (a, b) in enumerate(zip(first, second, strict=True)):

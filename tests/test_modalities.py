@@ -1,4 +1,4 @@
-"""The modality registry (prg.modalities): one record per modality, and every part that handles
+"""The modality registry (prg.models.modalities): one record per modality, and every part that handles
 modalities reads it: the DataModule's batches, the test data, the classifiers' inputs, the
 networks, the likelihoods and the shape check of a prepared dataset."""
 
@@ -13,8 +13,8 @@ from prg.data.store import load_split
 from prg.errors import UsageError
 from prg.evaluation import classifiers as clf
 from prg.evaluation.run import load_test_data
-from prg.modalities import IMAGE, LABEL, LETTER, MODALITIES, NAMES, TRAJ, in_order, letters
 from prg.models.likelihoods import Likelihoods
+from prg.models.modalities import IMAGE, LABEL, LETTER, MODALITIES, NAMES, TRAJ, in_order, letters
 
 
 def test_the_papers_three_modalities_in_its_order():

@@ -37,7 +37,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from scipy import ndimage
 
-from prg.data.alphabet import ALPHABET
+from prg.alphabet import ALPHABET
 from prg.data.preprocess import (
     normalise,
     preprocess_stroke,

@@ -6,10 +6,10 @@ import math
 import pytest
 import torch
 
-from prg.data.alphabet import ALPHABET
+from prg.alphabet import ALPHABET
 from prg.evaluation.coherence import folded_correct
+from prg.evaluation.likelihood import PAPER_TABLE1
 from prg.evaluation.reports import (
-    PAPER_TABLE1,
     coherence_markdown,
     robustness_markdown,
     table1_markdown,

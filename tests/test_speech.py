@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 import soundfile
 
-from prg.data.alphabet import text_to_labels
+from prg.alphabet import text_to_labels
 from prg.errors import UsageError
 from prg.pipeline.speech import (
     SAMPLE_RATE,

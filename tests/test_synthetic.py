@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from prg.data.alphabet import ALPHABET
+from prg.alphabet import ALPHABET
 from prg.data.synthetic import SyntheticSettings, generate, join_strokes, writer_styles
 from prg.errors import UsageError
 

@@ -83,7 +83,7 @@ def _word_image(data_dir: Path, path: Path, n: int = 3) -> list[int]:
 def test_images_channel_alone_or_with_the_text(tmp_path, checkpoint, small_dataset):
     image = tmp_path / "word.png"
     labels = _word_image(small_dataset, image)
-    from prg.data.alphabet import label_to_char
+    from prg.alphabet import label_to_char
 
     text = "".join(label_to_char(v) for v in labels)
     for args, expected_text in (

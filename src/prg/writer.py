@@ -33,6 +33,7 @@ from prg.errors import UsageError
 from prg.files import staged_outputs
 from prg.models.base import MultimodalVAE
 from prg.models.checkpoint import load_model
+from prg.models.modalities import IMAGE, LABEL, TRAJ
 from prg.pipeline.compose import GenerateSettings, clean_text, compose_word
 from prg.pipeline.decode import check_inputs, decode_letters, infer_text, label_inputs
 from prg.pipeline.perceive import (
@@ -146,7 +147,7 @@ class WriteResult:
         from prg.recording import record_write
 
         seen = self.perception
-        images = seen.inputs.get("image")
+        images = seen.inputs.get(IMAGE)
         heard: dict[str, Any] = {}
         if seen.transcript is not None:
             heard = {
@@ -271,14 +272,14 @@ class Writer:
             text = clean_text(transcript.word, self.on_unknown)
         inputs = label_inputs(text) if text is not None else {}
         if images is not None:
-            inputs["image"] = image_inputs(images)
+            inputs[IMAGE] = image_inputs(images)
         if trajectories is not None:
-            inputs["traj"] = trajectory_inputs(trajectories)
+            inputs[TRAJ] = trajectory_inputs(trajectories)
         model_read = None
         if text is None and spelling is None:
             model_read = self.read(inputs)
             text = check_text_length(model_read, "the word read from images=/trajectories=")
-        elif read and "label" in self.model.generated_modalities:
+        elif read and LABEL in self.model.generated_modalities:
             model_read = self.read(inputs)
         if model_read is not None:
             log.info("read %r from the images/trajectories", model_read)
@@ -296,7 +297,7 @@ class Writer:
     def read(self, inputs: dict[str, torch.Tensor]) -> str:
         """The letters the model reads from per-letter inputs (S given them; needs a family that
         generates labels)."""
-        return infer_text(self.model, {m: x for m, x in inputs.items() if m != "label"})
+        return infer_text(self.model, {m: x for m, x in inputs.items() if m != LABEL})
 
     def generate(self, perception: Perception) -> WriteResult:
         """Represent and Generate: decode a trajectory per letter, then size, place and connect

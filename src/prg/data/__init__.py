@@ -1,6 +1,6 @@
 """The handwriting data layer: alphabet, sources (UJI, synthetic), preprocessing, splits, loaders."""
 
-from prg.data.alphabet import ALPHABET, NUM_CLASSES, char_to_label, label_to_char, text_to_labels
+from prg.alphabet import ALPHABET, NUM_CLASSES, char_to_label, label_to_char, text_to_labels
 from prg.data.preprocess import (
     TRAJ_LAYOUT,
     normalise,

@@ -21,7 +21,7 @@ from omegaconf import DictConfig, OmegaConf
 from tqdm.auto import tqdm
 
 import prg
-from prg.data.alphabet import ALPHABET, char_to_label
+from prg.alphabet import ALPHABET, char_to_label
 from prg.data.augment import AugmentSettings, augment
 from prg.data.download import UJI_SHA256, UJI_URL, UjiSource, resolve_uji_path
 from prg.data.preprocess import (

@@ -14,7 +14,7 @@ from torch.utils.data import DataLoader, Dataset
 
 from prg.data.store import load_split
 from prg.errors import UsageError
-from prg.modalities import LABEL, MODALITIES, NAMES
+from prg.models.modalities import LABEL, MODALITIES, NAMES
 
 
 class ModalityDataset(Dataset):
@@ -25,7 +25,7 @@ class ModalityDataset(Dataset):
     ``batch_size`` small dicts.
 
     Each modality is held as stored (images as uint8 ink) and made a model input per batch
-    (:class:`prg.modalities.Modality`: ``load``, then ``prepare``).
+    (:class:`prg.models.modalities.Modality`: ``load``, then ``prepare``).
     """
 
     def __init__(self, arrays: dict[str, np.ndarray], modalities: Sequence[str]):
@@ -72,7 +72,7 @@ def read_manifest(root: str | Path) -> dict[str, Any]:
 
 def check_model_shapes(arrays: dict[str, np.ndarray], path: str | Path) -> None:
     """Refuse a split whose samples do not have the shapes the models take (each modality's
-    ``stored_shape`` in :data:`prg.modalities.MODALITIES`: 100 trajectory points, 28 x 28
+    ``stored_shape`` in :data:`prg.models.modalities.MODALITIES`: 100 trajectory points, 28 x 28
     images), naming the ``prg-prepare`` options that set them, as prepared and as needed."""
     wrong = []
     for spec in MODALITIES.values():
@@ -100,7 +100,7 @@ class PRGDataModule(L.LightningDataModule):
     name : str
         Prepared dataset name (``data.name``).
     modalities : sequence of str
-        Any non-empty subset of :data:`prg.modalities.NAMES` (``traj``, ``label``, ``image``);
+        Any non-empty subset of :data:`prg.models.modalities.NAMES` (``traj``, ``label``, ``image``);
         batches hold only these keys, each a model input of its modality's ``shape`` and
         ``dtype``: ``traj`` float (B, 200), ``label`` long (B,), ``image`` float (B, 1, 28, 28)
         in [0, 1].

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from prg.data.alphabet import ALPHABET
+from prg.alphabet import ALPHABET
 from prg.files import atomic_path
 from prg.plotting import pyplot
 

@@ -4,7 +4,7 @@ Arrays in a split file:
 
 - ``traj`` float32 (N, 2 * n_points): interleaved x1, y1, x2, y2, ... (normalised, y up)
 - ``image`` uint8 (N, size, size): grey ink, 0..255 (the DataModule divides by 255)
-- ``label`` int64 (N,): class id (``prg.data.alphabet``)
+- ``label`` int64 (N,): class id (``prg.alphabet``)
 - ``writer`` str (N,): writer id
 - ``augmented`` bool (N,): True for samples made by augmentation
 - ``parent`` int64 (N,): index (in this file) of the original an augmented sample came from, -1

@@ -30,7 +30,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
-from prg.data.alphabet import ALPHABET
+from prg.alphabet import ALPHABET
 from prg.data.preprocess import resample_arclength
 from prg.data.samples import RawSample
 from prg.errors import SettingsError, UsageError

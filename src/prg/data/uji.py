@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from prg.data.alphabet import is_supported
+from prg.alphabet import is_supported
 from prg.data.samples import RawSample
 from prg.errors import DataFormatError, UsageError
 

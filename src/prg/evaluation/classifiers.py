@@ -33,12 +33,12 @@ import torch
 from torch import nn
 from tqdm.auto import tqdm
 
-from prg.data.alphabet import ALPHABET, NUM_CLASSES
+from prg.alphabet import ALPHABET, NUM_CLASSES
 from prg.data.store import load_split
 from prg.errors import UsageError
 from prg.files import write_bytes, write_json
-from prg.modalities import LABEL
-from prg.modalities import MODALITIES as REGISTRY
+from prg.models.modalities import LABEL
+from prg.models.modalities import MODALITIES as REGISTRY
 
 log = logging.getLogger(__name__)
 
@@ -142,7 +142,7 @@ class ImageClassifier(nn.Module):
 
 
 NETWORKS: dict[str, type[nn.Module]] = {"points": TrajectoryClassifier, "pixels": ImageClassifier}
-"""The classifier network of each kind of modality (:data:`prg.modalities.KINDS`; a class label
+"""The classifier network of each kind of modality (:data:`prg.models.modalities.KINDS`; a class label
 needs none: its most probable class is read directly)."""
 
 CLASSIFIERS: dict[str, type[nn.Module]] = {
@@ -162,7 +162,7 @@ def _check_modality(modality: str) -> None:
 
 def to_input(modality: str, array: np.ndarray | torch.Tensor) -> torch.Tensor:
     """Split array -> classifier input, the models' input of the modality
-    (:meth:`prg.modalities.Modality.to_tensor`).
+    (:meth:`prg.models.modalities.Modality.to_tensor`).
 
     ``traj`` float (N, 200) -> float32 (N, 200); ``image`` uint8 (N, 28, 28) -> float32
     (N, 1, 28, 28) in [0, 1] (ink / 255).

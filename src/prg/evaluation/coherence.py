@@ -22,8 +22,8 @@ import torch
 from torch import nn
 
 from prg.evaluation.classifiers import FOLD, predict
-from prg.modalities import MODALITIES
 from prg.models.base import Inputs, MultimodalVAE
+from prg.models.modalities import MODALITIES
 
 
 def coherence_cells(model: MultimodalVAE) -> list[tuple[str, tuple[str, ...]]]:

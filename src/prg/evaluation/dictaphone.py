@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from scipy.signal import spectrogram
 
-from prg.data.alphabet import char_to_label
+from prg.alphabet import char_to_label
 from prg.errors import UsageError
 from prg.files import atomic_path
 from prg.pipeline.speech import SAMPLE_RATE

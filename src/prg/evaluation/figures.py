@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from prg.data.alphabet import ALPHABET, NUM_CLASSES
+from prg.alphabet import ALPHABET, NUM_CLASSES
 from prg.evaluation.coherence import coherence_cells
-from prg.modalities import LABEL, LETTER
 from prg.models.base import MultimodalVAE
+from prg.models.modalities import LABEL, LETTER
 from prg.training.generation_figures import grid_of
 
 

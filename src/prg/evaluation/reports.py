@@ -17,11 +17,12 @@ from typing import TYPE_CHECKING
 from prg.evaluation.classifiers import SHAPE_TWINS
 from prg.evaluation.likelihood import (
     MODEL_STD_SUFFIX,
+    PAPER_TABLE1,
     PAPER_TRAJ_STD,
     TABLE1_CELLS,
     density_convention,
 )
-from prg.modalities import LETTER, NAMES, TRAJ, letters
+from prg.models.modalities import LETTER, NAMES, TRAJ, letters
 
 if TYPE_CHECKING:
     from prg.evaluation.run import Evaluation
@@ -34,31 +35,6 @@ FAMILY_TITLES = {
     "muse": "PRG_MUSE(T,S,I)",
 }
 
-# Table I of Vital et al. (2022): augmented UJI Char Pen 2 test set, K = 1000 / 5000.
-PAPER_TABLE1: dict[str, dict[str, float]] = {
-    "cvae": {"logp_T_given_S": -192.75},
-    "avae_ts": {
-        "logp_T": -197.55,
-        "logp_S": -4.17,
-        "logp_T_given_S": -189.28,
-        "logp_S_given_T": 1.94,
-    },
-    "avae_ti": {
-        "logp_T": -197.69,
-        "logp_I": -743.57,
-        "logp_T_given_I": -186.28,
-        "logp_I_given_T": -730.44,
-    },
-    "muse": {
-        "logp_T": -198.04,
-        "logp_S": -4.53,
-        "logp_I": -742.49,
-        "logp_T_given_S": -198.10,
-        "logp_T_given_I": -193.63,
-        "logp_S_given_T": 1.96,
-        "logp_I_given_T": -735.02,
-    },
-}
 
 PAPER_NOTE = (
     "Paper values (in parentheses) come from models trained on the augmented UJI Char Pen 2 "

@@ -33,7 +33,7 @@ from typing import Any, NamedTuple
 import numpy as np
 import torch
 
-from prg.data.alphabet import NUM_CLASSES
+from prg.alphabet import NUM_CLASSES
 from prg.data.datamodule import check_model_shapes
 from prg.data.store import load_split
 from prg.errors import UsageError
@@ -47,14 +47,18 @@ from prg.evaluation.coherence import (
     per_class_rate,
     samples,
 )
-from prg.evaluation.likelihood import MODEL_STD_SUFFIX, TABLE1_CELLS, estimate_cell_multi
-from prg.evaluation.reports import PAPER_TABLE1, subset_name
+from prg.evaluation.likelihood import (
+    MODEL_STD_SUFFIX,
+    PAPER_TABLE1,
+    TABLE1_CELLS,
+    estimate_cell_multi,
+)
 from prg.evaluation.settings import IMPUTED, CoherenceSettings, EvaluationSettings
 from prg.evaluation.smoothness import median_roughness
-from prg.modalities import LABEL, LETTER, MODALITIES, NAMES, TRAJ
 from prg.models.base import MultimodalVAE
 from prg.models.checkpoint import load_model
 from prg.models.likelihoods import Likelihoods
+from prg.models.modalities import LABEL, LETTER, MODALITIES, NAMES, TRAJ, letters
 
 log = logging.getLogger(__name__)
 
@@ -248,7 +252,7 @@ def coherence_rows(
                 "model": name,
                 "family": model.family,
                 "target": target,
-                "given": subset_name(given),
+                "given": letters(given, ","),
                 "kind": kind,
                 "temperature": temperature,
                 "coherence": correct.float().mean().item(),
@@ -256,7 +260,7 @@ def coherence_rows(
                 "n": len(correct),
             }
         )
-        per_class[(name, target, subset_name(given), kind)] = per_class_rate(
+        per_class[(name, target, letters(given, ","), kind)] = per_class_rate(
             correct, labels, NUM_CLASSES
         ).numpy()
     return rows, per_class
@@ -294,7 +298,7 @@ def _roughness_row(name, model, given, kind, steps, data, reference, settings) -
         "model": name,
         "family": model.family,
         "target": TRAJ,
-        "given": subset_name(given),
+        "given": letters(given, ","),
         "kind": kind,
         "roughness": median,
         "reference": reference,
@@ -304,7 +308,7 @@ def _roughness_row(name, model, given, kind, steps, data, reference, settings) -
     log.info(
         "%s roughness T from %s (%s): %.3f (ratio %.2f)",
         name,
-        subset_name(given),
+        letters(given, ","),
         kind,
         median,
         row["ratio"],

@@ -15,9 +15,9 @@ from itertools import combinations
 import torch
 from torch import nn
 
-from prg.modalities import MODALITIES
 from prg.models.base import Gaussian, ImportancePath, Inputs, MultimodalVAE
 from prg.models.fusion import kl_standard_normal, reparameterise, symmetric_kl
+from prg.models.modalities import MODALITIES
 
 
 class AVAE(MultimodalVAE):

@@ -1,6 +1,6 @@
 """One interface for every multimodal VAE family (CVAE, AVAE, MUSE).
 
-Batches and inputs are dicts keyed by modality (:data:`prg.modalities.MODALITIES`: ``traj``
+Batches and inputs are dicts keyed by modality (:data:`prg.models.modalities.MODALITIES`: ``traj``
 (B, 200), ``label`` (B,) long, ``image`` (B, 1, 28, 28)); a missing modality is simply absent.
 
 - :meth:`MultimodalVAE.encode` — posterior over the family's generative latent from any input
@@ -26,9 +26,9 @@ import torch
 from torch import nn
 
 from prg.errors import UsageError
-from prg.modalities import LETTER, MODALITIES, NAMES, in_order
 from prg.models.fusion import reparameterise
 from prg.models.likelihoods import Likelihoods
+from prg.models.modalities import LETTER, MODALITIES, NAMES, in_order
 
 __all__ = ["LETTER", "MODALITIES", "Gaussian", "ImportancePath", "Inputs", "MultimodalVAE"]
 

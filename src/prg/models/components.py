@@ -7,7 +7,7 @@ parameters of the modality's likelihood (:mod:`prg.models.likelihoods`): the tra
 PyTorch's default). The tables list a LeakyReLU after the image decoder's last transposed
 convolution; it is left out here because that layer's outputs are the Bernoulli logits, which
 must range over all reals. Which network serves which modality is the registry's
-(:data:`prg.modalities.MODALITIES`: ``encoder``, ``decoder``).
+(:data:`prg.models.modalities.MODALITIES`: ``encoder``, ``decoder``).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from itertools import pairwise
 import torch
 from torch import nn
 
-from prg.data.alphabet import NUM_CLASSES
+from prg.alphabet import NUM_CLASSES
 
 TRAJ_DIM = 200
 IMAGE_SHAPE = (1, 28, 28)

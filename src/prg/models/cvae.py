@@ -12,7 +12,7 @@ from typing import ClassVar
 import torch
 import torch.nn.functional as F
 
-from prg.data.alphabet import NUM_CLASSES
+from prg.alphabet import NUM_CLASSES
 from prg.models.base import Gaussian, ImportancePath, Inputs, MultimodalVAE
 from prg.models.components import TrajectoryDecoder, TrajectoryEncoder
 from prg.models.fusion import kl_standard_normal, reparameterise

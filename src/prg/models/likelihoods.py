@@ -1,7 +1,7 @@
 """Per-modality likelihoods p(x | decoder output). Every log-density sums over the sample's
 dimensions and includes its normalising constant, so it is a true log-density (nats).
 
-Each modality's likelihood family is the registry's (:data:`prg.modalities.MODALITIES`,
+Each modality's likelihood family is the registry's (:data:`prg.models.modalities.MODALITIES`,
 ``likelihood``):
 
 - ``gaussian`` (``traj``): a fixed standard deviation ``traj_std`` on every coordinate (the
@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import torch
 import torch.nn.functional as F
 
-from prg.modalities import MODALITIES, NAMES, Modality
+from prg.models.modalities import MODALITIES, NAMES, Modality
 
 
 def gaussian_log_prob(
@@ -71,7 +71,7 @@ class Likelihoods:
 
         Parameters
         ----------
-        modality : a name of :data:`prg.modalities.MODALITIES` ("traj", "label", "image")
+        modality : a name of :data:`prg.models.modalities.MODALITIES` ("traj", "label", "image")
         params : Tensor
             Decoder output, shape (..., 200), (..., 62) or (..., 1, 28, 28).
         x : Tensor

@@ -32,10 +32,10 @@ from itertools import combinations
 import torch
 from torch import nn
 
-from prg.modalities import MODALITIES
 from prg.models.base import Gaussian, ImportancePath, Inputs, MultimodalVAE
 from prg.models.components import GaussianHead, mlp
 from prg.models.fusion import kl_standard_normal, product_of_experts, reparameterise, symmetric_kl
+from prg.models.modalities import MODALITIES
 
 
 def proper_subsets(modalities: tuple[str, ...]) -> list[tuple[str, ...]]:

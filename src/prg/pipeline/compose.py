@@ -13,8 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from prg.alphabet import text_to_labels, unsupported_chars
 from prg.checks import GENERATE_RANGES, check_text_length
-from prg.data.alphabet import text_to_labels, unsupported_chars
 from prg.errors import SettingsError, UsageError
 from prg.fields import check_ranges
 from prg.pipeline.connect import ConnectionSettings, connect_sequence

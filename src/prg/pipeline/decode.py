@@ -13,9 +13,10 @@ import math
 import numpy as np
 import torch
 
-from prg.data.alphabet import char_to_label, label_to_char, text_to_labels
+from prg.alphabet import char_to_label, label_to_char, text_to_labels
 from prg.errors import UsageError
 from prg.models.base import MODALITIES, MultimodalVAE
+from prg.models.modalities import IMAGE, LABEL, TRAJ
 
 log = logging.getLogger(__name__)
 
@@ -70,9 +71,9 @@ def decode_letters(
     chosen = usable_inputs(model, inputs)
     with torch.random.fork_rng(devices=[]):
         torch.manual_seed(seed)
-        out = model.generate(
-            chosen, "traj", n=1, temperature=temperature, impute_steps=impute_steps
-        )[0]
+        out = model.generate(chosen, TRAJ, n=1, temperature=temperature, impute_steps=impute_steps)[
+            0
+        ]
     return out.numpy().reshape(len(out), -1, 2).astype(np.float64)
 
 
@@ -85,13 +86,13 @@ def infer_text(model: MultimodalVAE, inputs: dict[str, torch.Tensor]) -> str:
     context (:func:`read_in_context`) chooses among. On ten demo words from the test split's
     letter images this reads 5 right, against 2 with imputation and the letters' first readings.
     """
-    if "label" not in model.generated_modalities:
+    if LABEL not in model.generated_modalities:
         raise UsageError(
             f"{model.family} cannot read letters from its inputs: give the text too (text=...)"
         )
     chosen = usable_inputs(model, inputs)
     with torch.no_grad():
-        probs = model.generate(chosen, "label")[0]
+        probs = model.generate(chosen, LABEL)[0]
     return read_in_context(probs)
 
 
@@ -99,7 +100,7 @@ def infer_text(model: MultimodalVAE, inputs: dict[str, torch.Tensor]) -> str:
 # capital and small forms of C O P S V W X Z, and a capital I and a small l (a vertical stroke).
 SHAPE_TWINS = {**{c: c.swapcase() for c in "CcOoPpSsVvWwXxZz"}, "I": "l", "l": "I"}
 
-# The label ranges of each kind of character (prg.data.alphabet: 0-9, A-Z, a-z).
+# The label ranges of each kind of character (prg.alphabet: 0-9, A-Z, a-z).
 _KIND_LABELS = (range(0, 10), range(10, 36), range(36, 62))
 
 
@@ -138,7 +139,7 @@ def check_inputs(text: str, inputs: dict[str, torch.Tensor]) -> None:
     text_to_labels("".join(letters))
     if not inputs:
         raise UsageError("no inputs: give the word through at least one channel")
-    options = {"image": "images", "traj": "trajectories", "label": "text"}  # the user's names
+    options = {IMAGE: "images", TRAJ: "trajectories", LABEL: "text"}  # the user's names
     for modality, value in inputs.items():
         if len(value) != len(letters):
             raise UsageError(
@@ -150,4 +151,4 @@ def check_inputs(text: str, inputs: dict[str, torch.Tensor]) -> None:
 def label_inputs(text: str) -> dict[str, torch.Tensor]:
     """The S channel of ``text``: one class id per non-space character."""
     letters = "".join(c for c in text if c != " ")
-    return {"label": torch.as_tensor(text_to_labels(letters), dtype=torch.long)}
+    return {LABEL: torch.as_tensor(text_to_labels(letters), dtype=torch.long)}

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from prg.data.alphabet import unsupported_chars
+from prg.alphabet import unsupported_chars
 from prg.errors import SettingsError, UsageError
 
 _EPS = 1e-9

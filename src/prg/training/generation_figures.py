@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from prg.data.alphabet import ALPHABET, NUM_CLASSES
-from prg.modalities import IMAGE, LABEL, MODALITIES, TRAJ
+from prg.alphabet import ALPHABET, NUM_CLASSES
 from prg.models.base import MultimodalVAE
+from prg.models.modalities import IMAGE, LABEL, MODALITIES, TRAJ
 from prg.plotting import pyplot
 
 
@@ -47,7 +47,7 @@ def image_grid(images: np.ndarray, titles: list[str], cols: int = 16, title: str
 
 
 GRIDS = {"points": trajectory_grid, "pixels": image_grid}
-"""The grid figure of each kind of modality (:data:`prg.modalities.KINDS`; class labels are shown
+"""The grid figure of each kind of modality (:data:`prg.models.modalities.KINDS`; class labels are shown
 as the titles of others)."""
 
 

@@ -5,7 +5,7 @@ Audio file or array (any sample rate and channel count)
 -> checks: not empty, not silent (RMS below ``min_rms_dbfs``), not longer than ``max_seconds``
 -> a recogniser backend: raw transcript
 -> :func:`transcript_to_word`: letters and digits only, words separated by one space, case applied
--> the text to write, whose characters are all in :mod:`prg.data.alphabet`.
+-> the text to write, whose characters are all in :mod:`prg.alphabet`.
 
 Spoken words carry no case, so the case of the written word is a choice (``SpeechSettings.case``).
 

@@ -8,7 +8,7 @@ import time
 
 import numpy as np
 
-from prg.data.alphabet import text_to_labels
+from prg.alphabet import text_to_labels
 from prg.errors import UsageError
 from prg.pipeline.speech.audio import SAMPLE_RATE, check_audio, load_audio
 from prg.pipeline.speech.backends import get_recogniser
@@ -102,7 +102,7 @@ def perceive_speech(
     -------
     text : str
         Alphabet characters (0-9, A-Z, a-z), words separated by single spaces; its letters
-        map to class labels with :func:`prg.data.alphabet.text_to_labels`.
+        map to class labels with :func:`prg.alphabet.text_to_labels`.
     transcript : Transcript
     """
     transcript = recognise(audio, params, sample_rate)

@@ -1,7 +1,7 @@
 """What a recogniser heard (:class:`Transcript`) and the text to write from it.
 
 A raw transcript -> :func:`transcript_to_word`: letters and digits only, words separated by one
-space, case applied -> the text to write, whose characters are all in :mod:`prg.data.alphabet`.
+space, case applied -> the text to write, whose characters are all in :mod:`prg.alphabet`.
 Spoken words carry no case, so the case of the written word is a choice (``SpeechSettings.case``).
 With a lexicon, a free transcript is snapped to the nearest entry (:func:`snap_to_lexicon`).
 """
@@ -12,7 +12,7 @@ import unicodedata
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from prg.data.alphabet import is_supported
+from prg.alphabet import is_supported
 from prg.errors import UsageError
 from prg.pipeline.speech.settings import CASES
 
