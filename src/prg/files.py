@@ -163,6 +163,21 @@ def _json_default(obj: Any) -> Any:
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
+def read_json(path: str | os.PathLike, name: str, missing: str | None = None) -> Any:
+    """The JSON document in ``path``; one :class:`~prg.errors.UsageError` naming it as ``name``
+    (``"trajectories file"``) when it does not exist (``missing``, if given, is that message) or
+    is not readable JSON."""
+    from prg.errors import UsageError
+
+    path = Path(path)
+    try:
+        return json.loads(path.read_text())
+    except FileNotFoundError:
+        raise UsageError(missing or f"{name} {path} does not exist") from None
+    except (OSError, ValueError) as err:
+        raise UsageError(f"{name} {path} is not readable JSON ({err})") from None
+
+
 def write_json(path: str | os.PathLike, obj: Any) -> Path:
     """Write :func:`json_text` of ``obj`` to ``path`` atomically."""
     return write_text(path, json_text(obj))

@@ -36,7 +36,7 @@ from tqdm.auto import tqdm
 from prg.alphabet import ALPHABET, NUM_CLASSES
 from prg.data.store import load_split
 from prg.errors import UsageError
-from prg.files import write_bytes, write_json
+from prg.files import read_json, write_bytes, write_json
 from prg.models.modalities import LABEL
 from prg.models.modalities import MODALITIES as REGISTRY
 
@@ -384,12 +384,8 @@ def data_fingerprint(data_dir: str | os.PathLike) -> str:
     new commit that rebuilds the same data should not force retraining.
     """
     path = Path(data_dir) / "manifest.json"
-    try:
-        manifest = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise UsageError(f"no dataset manifest at {path}: run `prg-prepare` first") from None
-    except (OSError, ValueError) as err:
-        raise UsageError(f"dataset manifest {path} is not readable JSON ({err})") from None
+    missing = f"no dataset manifest at {path}: run `prg-prepare` first"
+    manifest = read_json(path, "dataset manifest", missing)
     if not isinstance(manifest, dict):
         raise UsageError(f"dataset manifest {path} is not a JSON object")
     manifest.pop("code_version", None)

@@ -34,7 +34,6 @@ Image normalisation, step by step (:func:`ink_intensity` then :func:`perceive_le
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import warnings
@@ -46,6 +45,7 @@ from scipy import ndimage
 
 from prg.data.preprocess import TRAJ_LAYOUT, preprocess_stroke
 from prg.errors import UsageError
+from prg.files import read_json
 
 IMAGE_SIZE = 28  # as conf/data/_base_.yaml data.image
 STROKE_WIDTH = 2.0
@@ -447,12 +447,7 @@ def read_trajectories(path: str | os.PathLike) -> tuple[list[np.ndarray], bool]:
     ``{"strokes": [[[x, y], ...], ...], "y_down": false}`` (one pen-down stroke per letter, any
     scale) or a bare list of strokes (y up)."""
     path = Path(path)
-    try:
-        doc = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise UsageError(f"trajectories file {path} does not exist") from None
-    except (OSError, ValueError) as err:
-        raise UsageError(f"trajectories file {path} is not readable JSON ({err})") from None
+    doc = read_json(path, "trajectories file")
     strokes, y_down = (doc, False) if isinstance(doc, list) else (None, False)
     if isinstance(doc, dict):
         strokes, y_down = doc.get("strokes"), bool(doc.get("y_down", False))
