@@ -292,3 +292,24 @@ def test_every_command_stops_on_a_signal(
     after = {k: v for k, v in _tree_hashes(out, tmp_path / "models").items() if "/logs/" not in k}
     assert after == before  # logs (paper_scale's per-job logs) are not outputs
     assert not _leftovers(tmp_path)
+
+
+def test_a_signal_during_config_composition_waits_for_the_task(monkeypatch, capsys, tmp_path):
+    """A signal that lands while Hydra composes the config is held (OmegaConf's cleanup code can
+    swallow an exception raised inside it) and stops the command as the task starts."""
+    from prg.commands import cli
+
+    ran = []
+
+    def preflight(command, config_name, argv):
+        os.kill(os.getpid(), signal.SIGTERM)  # arrives inside the composition
+        ran.append("preflight went on")
+
+    monkeypatch.setattr(cli, "_preflight", preflight)
+    monkeypatch.setattr(sys, "argv", ["prg-write", f"hydra.run.dir={tmp_path}/logs"])
+    main = cli.hydra_command(lambda cfg: ran.append("task ran"), "write", "prg-write")
+    with pytest.raises(SystemExit) as stopped:
+        main()
+    assert stopped.value.code == 128 + signal.SIGTERM
+    assert ran == ["preflight went on"]  # held through the composition, raised before the task
+    assert "stopped by SIGTERM" in capsys.readouterr().err

@@ -59,18 +59,28 @@ def _exit_now(signum, frame) -> None:
     os._exit(128 + signum)
 
 
+def hold() -> None:
+    """Hold handled signals until the matching :func:`release` (nests)."""
+    _state.depth = getattr(_state, "depth", 0) + 1
+
+
+def release() -> None:
+    """End one :func:`hold`; the last one raises a signal that arrived meanwhile."""
+    _state.depth -= 1
+    pending = getattr(_state, "pending", None)
+    if pending is not None and _state.depth == 0:
+        _state.pending = None
+        _on_signal(pending, None)
+
+
 @contextmanager
 def deferred() -> Iterator[None]:
     """Hold a handled signal until the block ends, then raise it (nests)."""
-    _state.depth = getattr(_state, "depth", 0) + 1
+    hold()
     try:
         yield
     finally:
-        _state.depth -= 1
-        pending = getattr(_state, "pending", None)
-        if pending is not None and _state.depth == 0:
-            _state.pending = None
-            _on_signal(pending, None)
+        release()
 
 
 @contextmanager
@@ -90,4 +100,12 @@ def raising_signals() -> Iterator[None]:
             signal.signal(sig, handler)
 
 
-__all__ = ["HANDLED_SIGNALS", "Interrupted", "deferred", "raising_signals", "stop_children"]
+__all__ = [
+    "HANDLED_SIGNALS",
+    "Interrupted",
+    "deferred",
+    "hold",
+    "raising_signals",
+    "release",
+    "stop_children",
+]

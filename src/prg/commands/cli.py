@@ -36,7 +36,7 @@ from typing import Any
 
 from prg.errors import PRGError, UsageError
 from prg.resources import config_dir
-from prg.signals import Interrupted, raising_signals, stop_children
+from prg.signals import Interrupted, hold, raising_signals, release, stop_children
 
 
 def fail(command: str, message: str, code: int) -> None:
@@ -232,6 +232,7 @@ def hydra_command(task: Callable[[Any], Any], config_name: str, command: str) ->
 
     @hydra.main(config_path=str(config_dir()), config_name=config_name, version_base="1.3")
     def _run(cfg) -> None:
+        let_go()  # the config is composed: a signal held meanwhile stops the task now
         route_library_logs()
         logging.captureWarnings(True)  # library warnings to the log too
         try:
@@ -246,10 +247,25 @@ def hydra_command(task: Callable[[Any], Any], config_name: str, command: str) ->
         finally:
             logging.captureWarnings(False)
 
+    held = [False]
+
+    def let_go() -> None:
+        if held[0]:
+            held[0] = False
+            release()
+
     def main() -> None:
         with handle_signals(command):
-            _preflight(command, config_name, sys.argv[1:])
-            _run()
+            # Signals wait while Hydra composes the config (until the task starts): OmegaConf's
+            # cleanup code can replace an exception raised inside it with one of its own (an
+            # empty composition error, exit code 2, instead of "stopped by SIGTERM").
+            hold()
+            held[0] = True
+            try:
+                _preflight(command, config_name, sys.argv[1:])
+                _run()
+            finally:
+                let_go()
 
     return main
 
