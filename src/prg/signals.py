@@ -65,7 +65,10 @@ def hold() -> None:
 
 
 def release() -> None:
-    """End one :func:`hold`; the last one raises a signal that arrived meanwhile."""
+    """End one :func:`hold`; the last one raises a signal that arrived meanwhile. Nothing to end
+    in a thread or process that holds nothing (a sweep's job run by a launcher elsewhere)."""
+    if getattr(_state, "depth", 0) == 0:
+        return
     _state.depth -= 1
     pending = getattr(_state, "pending", None)
     if pending is not None and _state.depth == 0:

@@ -263,6 +263,8 @@ def hydra_command(task: Callable[[Any], Any], config_name: str, command: str) ->
             held[0] = True
             try:
                 _preflight(command, config_name, sys.argv[1:])
+                if {"-m", "--multirun"} & set(sys.argv[1:]):
+                    let_go()  # the jobs may run elsewhere (a launcher): the sweep stays stoppable
                 _run()
             finally:
                 let_go()
