@@ -53,9 +53,8 @@ def test_a_completed_task_is_finished_with_its_params_metrics_and_artifacts(cfg,
     [(ValueError("the work failed"), "FAILED"), (Interrupted(15), "KILLED")],
 )
 def test_a_failed_or_stopped_task_is_marked_so_and_the_error_goes_on(cfg, error, status):
-    with pytest.raises(type(error)):
-        with task_run(cfg, "evaluate"):
-            raise error
+    with pytest.raises(type(error)), task_run(cfg, "evaluate"):
+        raise error
     (found,) = _runs(cfg)
     assert found.info.status == status
 

@@ -187,8 +187,7 @@ class Writer:
         speech: SpeechSettings | None = None,
         on_unknown: str = "error",
     ):
-        if on_unknown not in ("error", "skip"):
-            raise UsageError(f"on_unknown {on_unknown!r}: choose error or skip")
+        _check_on_unknown(on_unknown)
         self.model = model.eval()
         self.settings = settings or GenerateSettings()
         self.speech = speech or SpeechSettings()
@@ -198,6 +197,7 @@ class Writer:
     def from_checkpoint(cls, path: str | os.PathLike, **kwargs: Any) -> Writer:
         """A writer with the model of the checkpoint ``path`` (``models/<family>/model.ckpt``, or
         a training checkpoint); ``kwargs`` as :class:`Writer`."""
+        _check_on_unknown(kwargs.get("on_unknown", "error"))  # before the model loads
         model, _ = load_model(path)
         return cls(model, **kwargs)
 
@@ -330,6 +330,11 @@ class Writer:
         _, transcript = perceive_speech(audio, self.speech)
         log.info("heard %r (%s) in %.2f s", transcript.word, transcript.backend, transcript.seconds)
         return transcript, samples
+
+
+def _check_on_unknown(on_unknown: str) -> None:
+    if on_unknown not in ("error", "skip"):
+        raise UsageError(f"on_unknown {on_unknown!r}: choose error or skip")
 
 
 def image_inputs(images: PathOrImages) -> torch.Tensor:

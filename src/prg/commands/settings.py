@@ -102,8 +102,6 @@ def checkpoint_path(cfg: DictConfig) -> Path:
 def writer_from_config(cfg: DictConfig) -> Writer:
     """The :class:`~prg.writer.Writer` of a write config: its checkpoint and settings."""
     generate, speech = generate_settings(cfg), speech_settings(cfg)
-    if cfg.on_unknown not in ("error", "skip"):
-        raise UsageError(f"on_unknown {cfg.on_unknown!r}: choose error or skip")
     return Writer.from_checkpoint(
         checkpoint_path(cfg), settings=generate, speech=speech, on_unknown=cfg.on_unknown
     )
