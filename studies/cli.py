@@ -20,6 +20,7 @@ import sys
 from collections.abc import Sequence
 
 from prg.errors import UsageError
+from prg.signals import deferred
 from studies import program
 from studies.program import Parser
 
@@ -38,8 +39,11 @@ def _add_unavailable(subparsers, reason: str) -> None:
 
 def _add_analysis(subparsers) -> None:
     """``analyze``, ``power`` and ``simulate``, or stand-ins saying why they are unavailable."""
+    # Held: a signal raised inside a C extension's import (numpy's) comes out as an ImportError,
+    # which would read as "unavailable" instead of stopping the command.
     try:
-        from studies.analysis.commands import register as register_analysis
+        with deferred():
+            from studies.analysis.commands import register as register_analysis
     except ImportError as err:
         _add_unavailable(subparsers, f"studies.analysis.commands cannot be imported ({err})")
     else:

@@ -7,6 +7,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 
 from prg.errors import UsageError
+from prg.signals import deferred
 
 INSTALL = "pip install prg[speech]"
 
@@ -20,9 +21,11 @@ def first_line(err: BaseException) -> str:
 @contextmanager
 def needs(dependency: str, backend: str) -> Iterator[None]:
     """Imports in the block are ``backend``'s optional ``dependency``: an :class:`ImportError`
-    becomes a :class:`UsageError` saying what to install."""
+    becomes a :class:`UsageError` saying what to install. Signals are held meanwhile: one raised
+    inside a C extension's import comes out as an ImportError and would read as "not installed"."""
     try:
-        yield
+        with deferred():
+            yield
     except ImportError:
         raise UsageError(
             f"speech backend {backend!r} needs {dependency}, not installed: {INSTALL}"
