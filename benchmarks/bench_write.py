@@ -97,7 +97,7 @@ def time_word(model, text: str, params: GenerateSettings) -> dict:
     Writer(model, straight).generate(Perception(text, inputs))
     total_straight = time.perf_counter() - start
     samples, _ = rest_to_rest_samples(
-        word.points, params.speed_cm_s, params.ramp_s, params.samples_per_s
+        word.body, params.speed_cm_s, params.ramp_s, params.samples_per_s
     )
     error = np.linalg.norm(path - samples, axis=1) * 10  # mm
     return {

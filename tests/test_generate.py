@@ -77,7 +77,7 @@ def test_a_word_is_laid_out_connected_and_reproduced_by_one_dmp():
     assert [c for c, _ in word.letters] == list("abcd")
     assert word.segment_kinds.count("connection") == 2 and word.segment_kinds.count("space") == 1
     assert word.dmp.n_basis >= 20 and word.duration_s > 0
-    demo, _ = rest_to_rest_samples(word.points, word.speed_cm_s, 0.3, 150)
+    demo, _ = rest_to_rest_samples(word.body, word.speed_cm_s, 0.3, 150)
     assert path.shape == demo.shape
     rmse = np.sqrt(((path - demo) ** 2).sum(1).mean())
     # cm: untrained decoders give jittery letters (measured 0.07); a quick AVAE(T,S) "hello

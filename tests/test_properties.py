@@ -47,10 +47,12 @@ from prg.data.preprocess import (
     smooth,
 )
 from prg.errors import UsageError
+from prg.evaluation.marks import check_marks
 from prg.pipeline.compose import GenerateSettings, compose_word
 from prg.pipeline.connect import connect_letters, connection_path, straight_connection
 from prg.pipeline.dmp import fit_dmp, rollout
 from prg.pipeline.layout import layout_letters
+from prg.pipeline.marks import MarkSettings
 from prg.pipeline.perceive import perceive_trajectories
 from prg.pipeline.timing import rest_to_rest_samples
 
@@ -509,7 +511,7 @@ def test_a_word_from_any_letters_is_finite_continuous_and_bounded(data, method):
     letters = np.stack([data.draw(normalised_letters(n_points)) for _ in chars])
     params = GenerateSettings(method=method)
     word, path = compose_word(letters, text, params)
-    points = word.points
+    points = word.body  # the delayed strokes follow it: tests/test_marks.py
     assert np.all(np.isfinite(points)) and np.all(np.isfinite(path))
     # the letters are written whole, in order, as laid out
     placed = layout_letters(list(letters), text)
@@ -517,8 +519,8 @@ def test_a_word_from_any_letters_is_finite_continuous_and_bounded(data, method):
         assert char == c
         np.testing.assert_array_equal(drawn, expected)
     # the pen never jumps: outside a letter's own points, no step exceeds delta
-    kinds = np.array(word.segment_kinds)[word.segment]
-    own = (np.diff(word.segment) == 0) & (kinds[1:] == "letter")
+    kinds = np.array(word.segment_kinds)[word.segment[: word.body_end]]
+    own = (np.diff(word.segment[: word.body_end]) == 0) & (kinds[1:] == "letter")
     delta = params.connection.delta
     assert steps(points)[~own].max(initial=0.0) <= delta * (1 + 1e-12)
     # letters stay in their bands, between the descender line and the full height
@@ -528,8 +530,8 @@ def test_a_word_from_any_letters_is_finite_continuous_and_bounded(data, method):
     assert ys.max() <= layout.letter_height + 1e-9
     # a connection ends after at most max_steps steered steps and a straight run to the next
     # letter: it stays within max(max_steps * delta, |B - A|) of the end A of its letter
-    for k in np.flatnonzero(np.array(word.segment_kinds) != "letter"):
-        a, b = points[word.segment == k - 1][-1], points[word.segment == k + 1][0]
+    for k in np.flatnonzero(np.isin(word.segment_kinds, ["connection", "space"])):
+        a, b = word.segment_points(k - 1)[-1], word.segment_points(k + 1)[0]
         radius = max(params.connection.max_steps * delta, np.hypot(*(b - a)))
         assert np.hypot(*(word.segment_points(k) - a).T).max() <= radius * (1 + 1e-12)
     # the DMP rollout follows the timed path: same start, no jump, close everywhere (the DMP
@@ -544,3 +546,25 @@ def test_a_word_from_any_letters_is_finite_continuous_and_bounded(data, method):
     assert steps(path).max() <= STEP_RATIO * largest
     assert np.hypot(*(path[-1] - demo[-1])) <= END_ERROR * largest
     assert deviation <= DEVIATION * largest
+    # the delayed strokes: each dotted or crossed letter has its mark (tests/test_marks.py)
+    assert check_marks(word, params.marks) == []
+
+
+def _stemmed_letter(data, n: int) -> np.ndarray:
+    """A random normalised letter of ``n`` points with some height (a stem to dot or cross)."""
+    coordinate = st.floats(-1, 1)
+    xy = np.array(data.draw(st.lists(st.tuples(coordinate, coordinate), min_size=n, max_size=n)))
+    if np.ptp(xy[:, 1]) < 0.1 * max(np.ptp(xy[:, 0]), 1e-3) or np.ptp(xy[:, 1]) < 1e-3:
+        xy[:, 1] = np.linspace(-1, 1, n)
+    return xy
+
+
+@examples(30)
+@given(data=st.data(), text=st.text(alphabet="ijtfaxT", min_size=1, max_size=4))
+def test_any_letter_shape_gets_a_mark_the_check_accepts(data, text):
+    n = data.draw(st.integers(3, 40))
+    letters = np.stack([_stemmed_letter(data, n) for _ in text])
+    params = GenerateSettings(marks=MarkSettings(dot_gap=data.draw(st.floats(0.02, 0.6))))
+    word, _ = compose_word(letters, text, params)
+    assert check_marks(word, params.marks) == []
+    assert word.segment_kinds.count("mark") == sum(c in "ijtf" for c in text)

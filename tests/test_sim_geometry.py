@@ -10,6 +10,7 @@ from numpy.testing import assert_allclose
 
 from prg.errors import SettingsError, UsageError
 from prg.pipeline.connect import subdivide
+from prg.pipeline.timing import min_jerk
 from prg.pipeline.word import assemble_word
 from prg.sim.geometry import (
     Paper,
@@ -17,7 +18,6 @@ from prg.sim.geometry import (
     distance_to_polylines,
     in_contact,
     max_ink_gap,
-    min_jerk,
     pen_down_samples,
     place_points,
     runs,

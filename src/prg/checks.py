@@ -109,6 +109,13 @@ GENERATE_RANGES: dict[str, Range] = {  # prg.pipeline.compose.GenerateSettings
     "basis_per_100_samples": count(1, 100),
 }
 
+MARK_RANGES: dict[str, Range] = {  # prg.pipeline.marks.MarkSettings (fractions of H)
+    "dot_gap": positive(0.6),  # 0 would put the dot on the stem; more floats away from it
+    "dot_radius": positive(1),
+    "bar_width": positive(3),
+    "bar_height": positive(3),
+}
+
 LIKELIHOOD_RANGES: dict[str, Range] = {  # prg.evaluation.settings.LikelihoodSettings
     "k_marginal": count(1, 1_000_000),
     "k_conditional": count(1, 1_000_000),
@@ -140,6 +147,7 @@ def _under(prefix: str, ranges: dict[str, Range]) -> dict[str, Range]:
 # ---- every numeric option of conf/ (prepare, train, evaluate, write, dictaphone, simulate) ----
 RANGES: dict[str, Range] = {
     **_under("generate", GENERATE_RANGES),
+    **_under("marks", MARK_RANGES),
     # data (prg-prepare; read back by prg-train and prg-evaluate)
     "data.seed": SEED,
     "data.preprocess.n_points": count(2, 4096),

@@ -16,6 +16,7 @@ name               RGB              what
 ``INK``            20, 20, 20       written letters and the simulated ink (recordings, ink PNGs)
 ``FIGURE_INK``     0, 0, 0          letters in saved figures of a word (PNG, SVG)
 ``CONNECTION``     214, 39, 40      connection strokes in figures (one colour for all of them)
+``MARK``           148, 103, 189    delayed strokes (i/j dots, t/f bars) in highlighted figures
 ``PEN_UP``         150, 150, 150    pen-up travel between words
 ``TARGET``         190, 190, 190    the path the DMP was fitted to
 ``COMMANDED``      120, 170, 255    the pen-down strokes the simulated robot was commanded
@@ -43,6 +44,7 @@ SCENE: RGB = (235, 235, 240)
 INK: RGB = (20, 20, 20)
 FIGURE_INK: RGB = (0, 0, 0)
 CONNECTION: RGB = (214, 39, 40)  # matplotlib's tab:red
+MARK: RGB = (148, 103, 189)  # matplotlib's tab:purple
 PEN_UP: RGB = (150, 150, 150)
 SPACE: RGB = (158, 158, 158)  # the dashed pen-up move over a space in word figures
 TARGET: RGB = (190, 190, 190)

@@ -98,10 +98,12 @@ class WriteResult:
     letters : ndarray, shape (N, 100, 2)
         The decoded letters, normalised (y up), one per non-space letter.
     word : WordTrajectory
-        Points and segments (letters, connection strokes, spaces) in centimetres, its timing and
-        its fitted DMP (``word.dmp``).
+        Points and segments (letters, connection strokes, spaces, then the delayed strokes:
+        i/j dots, t/f bars) in centimetres, its timing and the DMP fitted to its cursive body
+        (``word.dmp``).
     rollout : ndarray, shape (n, 2)
-        The DMP's rollout on ``linspace(0, word.duration_s, n)``.
+        The DMP's rollout on ``linspace(0, word.dmp.tau, n)`` (the body: the delayed strokes
+        follow it, :func:`prg.sim.word_samples` gives the whole motion).
     timings : dict of str to float
         Seconds: ``perceive``, ``decode`` (the model), ``compose`` (layout, connection strokes,
         DMP fit) and ``total``.
@@ -130,7 +132,7 @@ class WriteResult:
             self.word.to_json(staging / "word.json")
             self.word.to_png(staging / "word.png")
             self.word.to_svg(staging / "word.svg")
-            t = np.linspace(0.0, self.word.duration_s, len(self.rollout))
+            t = np.linspace(0.0, self.word.dmp.tau, len(self.rollout))
             np.savetxt(
                 staging / "dmp_rollout.csv",
                 np.column_stack([t, self.rollout]),

@@ -20,6 +20,7 @@ from prg.errors import SettingsError, UsageError
 from prg.pipeline.compose import GenerateSettings
 from prg.pipeline.connect import ConnectionSettings
 from prg.pipeline.layout import LayoutSettings
+from prg.pipeline.marks import MarkSettings
 from prg.pipeline.speech import SpeechSettings
 from prg.writer import Writer
 
@@ -51,10 +52,15 @@ def generate_settings(cfg: DictConfig) -> GenerateSettings:
     if isinstance(degrees, bool) or not isinstance(degrees, int | float):
         raise UsageError(f"connection.alpha_max_deg must be a number, got {degrees!r}")
     connection["alpha_max"] = math.radians(degrees)
+    delayed = cfg.get("delayed_strokes", True)
+    if not isinstance(delayed, bool):
+        raise UsageError(f"delayed_strokes must be true or false, got {delayed!r}")
     return build(
         GenerateSettings,
         node(cfg, "generate"),
         "generate",
+        delayed_strokes=delayed,
+        marks=build(MarkSettings, node(cfg, "marks"), "marks"),
         layout=build(LayoutSettings, node(cfg, "layout"), "layout"),
         connection=build(ConnectionSettings, connection, "connection"),
     )

@@ -68,7 +68,7 @@ def dmp_rmse_mm(result: WriteResult) -> float:
     """RMSE (mm) of the DMP rollout against the timed demonstration it was fitted to."""
     settings = result.settings
     samples, _ = rest_to_rest_samples(
-        result.word.points, settings.speed_cm_s, settings.ramp_s, settings.samples_per_s
+        result.word.body, settings.speed_cm_s, settings.ramp_s, settings.samples_per_s
     )
     return float(np.sqrt(np.mean(np.sum((result.rollout - samples) ** 2, axis=1))) * 10)
 

@@ -1,9 +1,11 @@
 """Generate: decoded letters -> laid-out word -> connection strokes -> one DMP (NumPy only).
 
 :func:`compose_word` applies the final processing map (``prg.pipeline.layout``: sizes and
-baseline; ``prg.pipeline.connect``: connection strokes) to the decoded letters, times the path
-from rest to rest (``prg.pipeline.timing``) and fits one DMP to the whole word
-(``prg.pipeline.dmp``). :func:`clean_text` makes a user's text ready to write.
+baseline; ``prg.pipeline.connect``: connection strokes) to the decoded letters, adds the delayed
+strokes (``prg.pipeline.marks``: i/j dots, t/f bars), times the path from rest to rest
+(``prg.pipeline.timing``) and fits one DMP to the cursive body (``prg.pipeline.dmp``); the
+delayed strokes are timed as straight minimum-jerk strokes after it. :func:`clean_text` makes a
+user's text ready to write.
 """
 
 from __future__ import annotations
@@ -20,7 +22,8 @@ from prg.fields import check_ranges
 from prg.pipeline.connect import ConnectionSettings, connect_sequence
 from prg.pipeline.dmp import basis_count, fit_dmp, rollout
 from prg.pipeline.layout import LayoutSettings, layout_letters, word_breaks
-from prg.pipeline.timing import rest_to_rest_samples
+from prg.pipeline.marks import MarkSettings, letter_marks
+from prg.pipeline.timing import rest_to_rest_samples, stroke_duration
 from prg.pipeline.word import DEFAULT_SPEED_CM_S, WordTrajectory, assemble_word
 
 log = logging.getLogger(__name__)
@@ -46,6 +49,9 @@ class GenerateSettings:
         70 per 100 samples at 100 samples/s, 30 random words of 6-12 letters from the demo MUSE
         were reproduced with RMSE median 0.024 mm, 90th percentile 0.061 mm, worst 0.107 mm
         (50: 0.058 / 0.123 / 0.261; 20 left up to 0.3 mm; ``benchmarks/bench_write.py``).
+    delayed_strokes : after the cursive body, dot the i's and j's and cross the t's and f's
+        (``marks``: which letters, sizes; :mod:`prg.pipeline.marks`). False: the paper's single
+        stroke.
     """
 
     temperature: float = 0.0
@@ -56,6 +62,8 @@ class GenerateSettings:
     ramp_s: float = 0.3
     samples_per_s: float = 100.0
     basis_per_100_samples: int = 70
+    delayed_strokes: bool = True
+    marks: MarkSettings = field(default_factory=MarkSettings)
     layout: LayoutSettings = field(default_factory=LayoutSettings)
     connection: ConnectionSettings = field(default_factory=ConnectionSettings)
 
@@ -63,6 +71,10 @@ class GenerateSettings:
         check_ranges(self, GENERATE_RANGES)
         if self.method not in CONNECTION_METHODS:
             raise SettingsError("method", f"{self.method!r}: choose alg1 or straight")
+        if not isinstance(self.delayed_strokes, bool):
+            raise SettingsError(
+                "delayed_strokes", f"{self.delayed_strokes!r}: choose true or false"
+            )
 
 
 def compose_word(
@@ -81,23 +93,31 @@ def compose_word(
     Returns
     -------
     word : WordTrajectory
-        Points, segments, text, timing and the fitted DMP (``word.dmp``).
+        Points, segments (the delayed strokes last), text, timing and the DMP fitted to the
+        body (``word.dmp``).
     rollout : ndarray, shape (n, 2)
-        The DMP's rollout on the demonstration's time grid.
+        The DMP's rollout on the demonstration's time grid (the body).
     """
     params = params or GenerateSettings()
     placed = layout_letters(list(letters), text, params.layout)
     connections = connect_sequence(
         placed, params.connection, method=params.method, breaks=word_breaks(text)
     )
-    word = assemble_word(placed, connections, text, speed_cm_s=params.speed_cm_s)
+    marks = (
+        letter_marks(placed, text, params.marks, params.layout) if params.delayed_strokes else []
+    )
+    word = assemble_word(
+        placed, connections, text, speed_cm_s=params.speed_cm_s, marks=[m for *_, m in marks]
+    )
     samples, duration = rest_to_rest_samples(
-        word.points, params.speed_cm_s, params.ramp_s, params.samples_per_s
+        word.points[: word.body_end], params.speed_cm_s, params.ramp_s, params.samples_per_s
     )
     n_basis = basis_count(len(samples), per_100_points=params.basis_per_100_samples)
     dmp = fit_dmp(samples, tau=duration, n_basis=n_basis)
     word.dmp = dmp
-    word.duration_s = duration
+    word.duration_s = duration + sum(
+        stroke_duration(path, params.speed_cm_s) for _, path in word.delayed_strokes()
+    )
     return word, rollout(dmp)
 
 

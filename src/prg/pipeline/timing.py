@@ -5,14 +5,27 @@ samples would need an initial velocity the DMP does not have: an error of about 
 path length near the start). :func:`rest_to_rest_samples` resamples the path uniformly in time
 under a speed profile that rises and falls with half-cosine ramps of ``ramp_s`` seconds and is
 constant in between; the mean speed over the word stays ``speed_cm_s``.
+
+The delayed strokes (:mod:`prg.pipeline.marks`) and the pen-up travels to them are not part of
+the DMP: each is a short straight stroke (a bar, a travel) or a tiny circle (a dot) that a DMP
+would only smooth away. :func:`stroke_samples` times each along its own path with the
+minimum-jerk rest-to-rest profile (:func:`min_jerk`), in :func:`stroke_duration` seconds: the
+word's mean speed, but at least :data:`MIN_STROKE_S`, so the pen settles on a dot instead of
+flicking it.
 """
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from prg.errors import UsageError
 
+if TYPE_CHECKING:
+    from prg.pipeline.word import WordTrajectory
+
+MIN_STROKE_S = 0.2
 MAX_DMP_SAMPLES = 20_000  # 200 s of writing at 100 samples/s: about 1 GB and 25 s to fit
 
 
@@ -76,3 +89,56 @@ def _ramped_distance(t: np.ndarray, duration: float, ramp: float) -> np.ndarray:
         up(t),
         np.where(t > duration - ramp, total - up(duration - t), up(ramp) + (t - ramp)),
     )
+
+
+def min_jerk(n: int) -> np.ndarray:
+    """The minimum-jerk rest-to-rest profile ``10u^3 - 15u^4 + 6u^5`` on ``n`` samples of [0, 1]."""
+    u = np.linspace(0.0, 1.0, n)
+    return u**3 * (10.0 - 15.0 * u + 6.0 * u**2)
+
+
+def stroke_duration(points: np.ndarray, speed_cm_s: float) -> float:
+    """Seconds for a delayed stroke or travel along ``points``: length / speed, at least
+    :data:`MIN_STROKE_S`."""
+    length = float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+    return max(length / speed_cm_s, MIN_STROKE_S)
+
+
+def stroke_samples(points: np.ndarray, duration: float, dt: float) -> np.ndarray:
+    """``points`` (m, 2) followed from rest to rest in ``duration`` seconds under the
+    minimum-jerk profile, one sample every ``dt`` seconds or a little less (both ends included),
+    shape (n >= 2, 2)."""
+    steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    arc = np.concatenate([[0.0], np.cumsum(steps)])
+    n = max(2, int(np.ceil(duration / dt)) + 1)
+    s = min_jerk(n) * arc[-1]
+    return np.column_stack([np.interp(s, arc, points[:, 0]), np.interp(s, arc, points[:, 1])])
+
+
+def delayed_samples(
+    word: WordTrajectory, dt: float, tempo: float = 1.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The motion after the word's body: each pen-up travel and delayed stroke in turn
+    (:meth:`WordTrajectory.delayed_strokes`), from rest to rest.
+
+    Returns
+    -------
+    samples : ndarray, shape (n, 2)
+        Centimetres; the body's last point (where the motion starts) is not repeated.
+    t : ndarray, shape (n,)
+        Seconds after the body's end, increasing.
+    pen_down : ndarray of bool, shape (n,)
+        True on the marks and at the end of each travel (where the pen goes down).
+    """
+    xy, t, down = [np.empty((0, 2))], [np.empty(0)], [np.empty(0, dtype=bool)]
+    clock = 0.0
+    for kind, path in word.delayed_strokes():
+        duration = stroke_duration(path, word.speed_cm_s) * tempo
+        part = stroke_samples(path, duration, dt)[1:]
+        flags = np.full(len(part), kind == "mark")
+        flags[-1] = True  # a travel ends where its mark begins: the pen goes down there
+        xy.append(part)
+        t.append(clock + np.linspace(0.0, duration, len(part) + 1)[1:])
+        down.append(flags)
+        clock += duration
+    return np.concatenate(xy), np.concatenate(t), np.concatenate(down)

@@ -10,10 +10,16 @@ one kind:
   segment, so two letter segments can be adjacent;
 * ``"space"`` — the pen-up travel between the last letter of a word and the first of the next,
   when ``text`` holds several words on one line (a straight path subdivided at ``delta``: the DMP
-  stays one continuous motion; the simulator lifts the pen and renderings draw no ink there).
+  stays one continuous motion; the simulator lifts the pen and renderings draw no ink there);
+* ``"lift"`` — after the cursive **body** (the letters, connections and spaces, which one DMP
+  writes), the pen-up travel to a delayed stroke (a straight path, points strictly between its
+  ends);
+* ``"mark"`` — a delayed stroke: the dot of an ``i``/``j`` or the bar of a ``t``/``f``
+  (:mod:`prg.pipeline.marks`). Every mark follows a lift; marks are written after the body.
 
 Files: :meth:`WordTrajectory.to_json` / :meth:`WordTrajectory.from_json` (schema
-``prg.word_trajectory`` version 1; floats round-trip exactly), :meth:`WordTrajectory.to_svg` and
+``prg.word_trajectory`` version 2, which added ``lift`` and ``mark``; version 1 files are read
+too; floats round-trip exactly), :meth:`WordTrajectory.to_svg` and
 :meth:`WordTrajectory.to_png`. Every file is written under a temporary name in the destination
 folder and renamed into place, so a reader never sees half a file.
 """
@@ -35,14 +41,17 @@ from prg.errors import UsageError
 from prg.files import atomic_path
 from prg.pipeline.connect import ConnectionResult
 from prg.pipeline.layout import word_breaks
-from prg.plotting import CONNECTION, FIGURE_INK, PAPER, SPACE, hex_colour
+from prg.plotting import CONNECTION, FIGURE_INK, MARK, PAPER, SPACE, hex_colour
 
 if TYPE_CHECKING:  # the DMP module (scipy) is imported when a word has a DMP
     from prg.pipeline.dmp import DMP
 
 SCHEMA = "prg.word_trajectory"
-SCHEMA_VERSION = 1
-SEGMENT_KINDS = ("letter", "connection", "space")
+SCHEMA_VERSION = 2
+READ_VERSIONS = (1, 2)
+SEGMENT_KINDS = ("letter", "connection", "space", "lift", "mark")
+PEN_UP_KINDS = ("space", "lift")
+DELAYED_KINDS = ("lift", "mark")
 DEFAULT_SPEED_CM_S = 2.0
 
 # How each kind is drawn when highlighting: (colour, width as a fraction of the pen width, dashes)
@@ -50,6 +59,8 @@ _STYLES = {
     "letter": (hex_colour(FIGURE_INK), 1.0, None),
     "connection": (hex_colour(CONNECTION), 1.0, None),
     "space": (hex_colour(SPACE), 0.5, (3.0, 3.0)),
+    "lift": (hex_colour(SPACE), 0.5, (1.0, 3.0)),
+    "mark": (hex_colour(MARK), 1.0, None),
 }
 _INK = (hex_colour(FIGURE_INK), 1.0, None)
 
@@ -72,17 +83,19 @@ class WordTrajectory:
     segment : ndarray of int, shape (P,)
         Segment id of each point: ``0, ..., S - 1``, non-decreasing, every segment non-empty.
     segment_kinds : list of str, length S
-        ``"letter"``, ``"connection"`` or ``"space"`` per segment (module docstring).
+        ``"letter"``, ``"connection"``, ``"space"``, ``"lift"`` or ``"mark"`` per segment
+        (module docstring).
     text : str
         The written text; its non-space characters are the letter segments, in order.
     dmp : DMP or None
-        The DMP fitted to the whole path (:class:`prg.pipeline.dmp.DMP`); stored in the JSON
+        The DMP fitted to the body (the whole path but the delayed strokes, :attr:`body_end`) (:class:`prg.pipeline.dmp.DMP`); stored in the JSON
         document as :meth:`DMP.to_dict <prg.pipeline.dmp.DMP.to_dict>` (weights, start, goal,
         tau, basis ...).
     speed_cm_s : float
         Mean pen speed along the path (cm/s), from the writing config.
     duration_s : float, optional
-        Time to write the whole path; computed as path length / speed when not given.
+        Time to write the whole path, delayed strokes included; computed as path length / speed
+        when not given.
     """
 
     points: np.ndarray
@@ -136,6 +149,20 @@ class WordTrajectory:
             raise UsageError(
                 f"unknown segment kind {bad[0]!r}: accepted are {', '.join(SEGMENT_KINDS)}"
             )
+        first_delayed = next(
+            (k for k, kind in enumerate(self.segment_kinds) if kind in DELAYED_KINDS), n_seg
+        )
+        tail = self.segment_kinds[first_delayed:]
+        if tail and (
+            len(tail) % 2
+            or tail[0::2] != ["lift"] * (len(tail) // 2)
+            or tail[1::2] != ["mark"] * (len(tail) // 2)
+        ):
+            raise UsageError(
+                "delayed strokes must come after the body as lift, mark, lift, mark, ... segments"
+            )
+        if first_delayed == 0:
+            raise UsageError("the word has no body before its delayed strokes")
         if not isinstance(self.text, str):
             raise UsageError(f"text must be a string, got {type(self.text).__name__}")
         n_chars = sum(c != " " for c in self.text)
@@ -170,6 +197,32 @@ class WordTrajectory:
     def n_segments(self) -> int:
         return len(self.segment_kinds)
 
+    @property
+    def body_end(self) -> int:
+        """Number of points of the body (the cursive word the DMP writes): the points before the
+        first delayed stroke's lift, or all of them."""
+        kinds = np.array(self.segment_kinds, dtype=object)[self.segment]
+        delayed = np.flatnonzero(np.isin(kinds, DELAYED_KINDS))
+        return int(delayed[0]) if len(delayed) else len(self.points)
+
+    @property
+    def body(self) -> np.ndarray:
+        """The body's points (what the DMP is fitted to), shape (:attr:`body_end`, 2)."""
+        return self.points[: self.body_end]
+
+    def delayed_strokes(self) -> list[tuple[str, np.ndarray]]:
+        """``(kind, path)`` of each lift and mark after the body, in order; a lift's path runs
+        from the previous segment's last point to the mark's first point."""
+        out = []
+        for k in range(self.n_segments):
+            kind = self.segment_kinds[k]
+            if kind == "lift":
+                ends = [self.segment_points(k - 1)[-1:], self.segment_points(k)]
+                out.append((kind, np.concatenate([*ends, self.segment_points(k + 1)[:1]])))
+            elif kind == "mark":
+                out.append((kind, self.segment_points(k)))
+        return out
+
     def segment_points(self, k: int) -> np.ndarray:
         """Points of segment ``k``, shape (n_k, 2)."""
         return self.points[self.segment == k]
@@ -182,13 +235,13 @@ class WordTrajectory:
         return [(c, self.segment_points(k)) for c, k in zip(chars, ids)]
 
     def pen_down(self) -> np.ndarray:
-        """Per point: False on pen-up (``"space"``) segments, shape (P,)."""
+        """Per point: False on pen-up (``"space"``, ``"lift"``) segments, shape (P,)."""
         kinds = np.array(self.segment_kinds, dtype=object)
-        return kinds[self.segment] != "space"
+        return ~np.isin(kinds[self.segment], PEN_UP_KINDS)
 
     # ------------------------------------------------------------------ JSON
     def to_dict(self) -> dict:
-        """The JSON document (schema ``prg.word_trajectory``, version 1)."""
+        """The JSON document (schema ``prg.word_trajectory``, version 2)."""
         return {
             "schema": SCHEMA,
             "version": SCHEMA_VERSION,
@@ -209,9 +262,10 @@ class WordTrajectory:
             raise UsageError("expected a JSON object")
         if doc.get("schema") != SCHEMA:
             raise UsageError(f"schema must be {SCHEMA!r}, got {doc.get('schema')!r}")
-        if doc.get("version") != SCHEMA_VERSION:
+        if doc.get("version") not in READ_VERSIONS:
             raise UsageError(
-                f"unsupported version {doc.get('version')!r}: accepted is {SCHEMA_VERSION}"
+                f"unsupported version {doc.get('version')!r}: accepted are "
+                + ", ".join(map(str, READ_VERSIONS))
             )
         required = ("text", "speed_cm_s", "duration_s", "segment_kinds", "segment", "points")
         missing = [k for k in required if k not in doc]
@@ -275,18 +329,18 @@ class WordTrajectory:
         """``(kind, points)`` per drawn piece; each consecutive point pair is in one piece.
 
         A piece starts at the previous segment's last point (so the ink is continuous) unless
-        that segment is pen-up; a pen-up piece ends at the next segment's first point. Without
-        ``highlight``, pen-up pieces are dropped.
+        that segment is pen-up or the piece is a mark (a stroke of its own); a pen-up piece ends
+        at the next segment's first point. Without ``highlight``, pen-up pieces are dropped.
         """
         out = []
         kinds = self.segment_kinds
         for k, kind in enumerate(kinds):
             pts = self.segment_points(k)
-            if k > 0 and kinds[k - 1] != "space":
+            if k > 0 and kinds[k - 1] not in PEN_UP_KINDS and kind != "mark":
                 pts = np.concatenate([self.segment_points(k - 1)[-1:], pts])
-            if kind == "space" and k + 1 < len(kinds):
+            if kind in PEN_UP_KINDS and k + 1 < len(kinds):
                 pts = np.concatenate([pts, self.segment_points(k + 1)[:1]])
-            if kind == "space" and not highlight:
+            if kind in PEN_UP_KINDS and not highlight:
                 continue
             out.append((kind, pts))
         return out
@@ -311,8 +365,8 @@ class WordTrajectory:
         Parameters
         ----------
         highlight : bool
-            True: letters black, connections red, pen-up travel grey dashed (each polyline has
-            ``class`` = its kind). False: all pen-down ink black, pen-up travel not drawn (what
+            True: letters black, connections red, delayed strokes (marks) purple, pen-up travel grey
+            dashed (each polyline has ``class`` = its kind). False: all pen-down ink black, pen-up travel not drawn (what
             a reader of the handwriting sees).
         pen_width_cm, margin_cm : float
         """
@@ -423,8 +477,10 @@ def assemble_word(
     text: str,
     speed_cm_s: float = DEFAULT_SPEED_CM_S,
     dmp: DMP | None = None,
+    marks: Sequence[np.ndarray] = (),
 ) -> WordTrajectory:
-    """Concatenate laid-out letters and their connections into a :class:`WordTrajectory`.
+    """Concatenate laid-out letters, their connections and the delayed strokes into a
+    :class:`WordTrajectory`.
 
     Parameters
     ----------
@@ -440,6 +496,10 @@ def assemble_word(
     speed_cm_s : float
         Writing speed; ``duration_s`` = path length / speed.
     dmp : DMP, optional
+    marks : sequence of ndarray, each shape (m, 2)
+        Delayed strokes written after the body, in order (:func:`prg.pipeline.marks.
+        letter_marks`); each becomes a ``"lift"`` segment (pen-up travel from where the pen is)
+        and a ``"mark"`` segment.
 
     Returns
     -------
@@ -471,6 +531,14 @@ def assemble_word(
             if pts.shape[0]:
                 pieces.append(pts)
                 kinds.append("space" if breaks[i] else "connection")
+    for mark in marks:
+        mark = np.asarray(mark, dtype=np.float64)
+        if mark.ndim != 2 or mark.shape[1] != 2 or mark.shape[0] < 2:
+            raise UsageError(f"a delayed stroke must have shape (m >= 2, 2), got {mark.shape}")
+        pieces.append(travel_points(pieces[-1][-1], mark[0]))
+        kinds.append("lift")
+        pieces.append(mark)
+        kinds.append("mark")
     segment = np.concatenate([np.full(p.shape[0], k, dtype=np.int64) for k, p in enumerate(pieces)])
     return WordTrajectory(
         points=np.concatenate(pieces, axis=0),
@@ -480,3 +548,17 @@ def assemble_word(
         dmp=dmp,
         speed_cm_s=speed_cm_s,
     )
+
+
+TRAVEL_STEP_CM = 0.1
+
+
+def travel_points(
+    start: np.ndarray, end: np.ndarray, step_cm: float = TRAVEL_STEP_CM
+) -> np.ndarray:
+    """The straight pen-up path from ``start`` to ``end``: points ``step_cm`` apart or closer,
+    strictly between the two (at least the midpoint), shape (k >= 1, 2)."""
+    start, end = np.asarray(start, dtype=np.float64), np.asarray(end, dtype=np.float64)
+    n = max(2, int(np.ceil(np.hypot(*(end - start)) / step_cm)))
+    u = np.linspace(0.0, 1.0, n + 1)[1:-1, None]
+    return start + u * (end - start)

@@ -12,10 +12,11 @@ entity                          archetype           when
 ``decoded/<i>_<c>``             LineStrips2D        static, raw normalised decoded letter
 ``word/letters/<i>_<c>``        LineStrips2D        static, the laid-out letter (ink colour)
 ``word/connections/<j>``        LineStrips2D        static, one colour per connection
-``word/pen_up/<k>``             LineStrips2D        static, pen-up travel between words
+``word/pen_up/<k>``             LineStrips2D        static, pen-up travel (between words, to a mark)
+``word/marks/<m>``              LineStrips2D        static, a delayed stroke (i/j dot, t/f bar)
 ``word/target``                 LineStrips2D        static, the demonstration path of the DMP
-``word/rollout/pen``            Points2D            one row per rollout sample on ``time``
-``word/rollout/path``           LineStrips2D        one segment per rollout step on ``time``
+``word/rollout/pen``            Points2D            one row per motion sample on ``time``
+``word/rollout/path``           LineStrips2D        one segment per pen-down step on ``time``
 ``summary``                     TextDocument        static (text, sizes, timing, DMP)
 ==============================  ==================  ===============================================
 
@@ -29,9 +30,11 @@ Coordinates
     :class:`rerun.Transform3D` translation of :data:`DECODED_SPACING` units per letter.
 
 Timelines
-    ``time`` (seconds, a duration timeline) is the writing: the DMP rollout of ``n`` samples is
-    placed on ``linspace(0, word.duration_s, n)``. The pen is one point per sample; the path
-    written so far is one two-point segment per step, which the default blueprint accumulates
+    ``time`` (seconds, a duration timeline) is the writing: the body's DMP rollout of ``n``
+    samples is placed on ``linspace(0, dmp.tau, n)``, then the delayed strokes and the pen-up
+    travels to them follow (:func:`prg.pipeline.timing.delayed_samples`, same spacing). The pen is
+    one point per sample; the ink written so far is one two-point segment per pen-down step
+    (none over a pen-up travel), which the default blueprint accumulates
     with a visible time range from the start to the cursor (Rerun's idiom for trails), so the data
     grow linearly with ``n``. Both are sent with one :meth:`~rerun.RecordingStream.send_columns`
     call each. The spoken command is placed on ``time`` *before* the writing (it ends at 0, when
@@ -56,7 +59,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from prg.errors import UsageError
-from prg.pipeline.word import WordTrajectory
+from prg.pipeline.word import PEN_UP_KINDS, WordTrajectory
 from prg.plotting import INK, PAPER, PEN, PEN_UP, TARGET, WAVEFORM, distinct_colours
 from prg.recording.audio import audio_samples, sample_rate_hz, wav_bytes, waveform_envelope
 from prg.recording.stream import recording_stream
@@ -112,6 +115,27 @@ def _rollout(rollout) -> np.ndarray:
     if not np.all(np.isfinite(arr)):
         raise UsageError("rollout contains NaN or infinite values")
     return arr
+
+
+def _motion(word: WordTrajectory, rollout: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The body's rollout on its time grid, then the delayed strokes at the same spacing:
+    samples, times, pen-down flags."""
+    from prg.pipeline.timing import delayed_samples, stroke_duration
+    from prg.sim.geometry import pen_down_samples
+
+    if word.dmp is not None:
+        tau = word.dmp.tau
+    else:
+        delayed = word.delayed_strokes()
+        tau = word.duration_s - sum(stroke_duration(p, word.speed_cm_s) for _, p in delayed)
+    after_xy, after_t, after_down = delayed_samples(word, tau / (len(rollout) - 1))
+    body = slice(0, word.body_end)
+    down = pen_down_samples(word.points[body], word.segment[body], word.segment_kinds, rollout)
+    return (
+        np.concatenate([rollout, after_xy]),
+        np.concatenate([np.linspace(0.0, tau, len(rollout)), tau + after_t]),
+        np.concatenate([down, after_down]),
+    )
 
 
 def log_audio(
@@ -193,19 +217,20 @@ def log_word(rec: rr.RecordingStream, word: WordTrajectory, root: str = "word") 
         static=True,
         strict=True,
     )
-    counters = {"letter": 0, "connection": 0, "space": 0}
+    counters = {"letter": 0, "connection": 0, "pen_up": 0, "mark": 0}
     for k, kind in enumerate(kinds):
-        i = counters[kind]
-        counters[kind] += 1
+        counter = "pen_up" if kind in PEN_UP_KINDS else kind
+        i = counters[counter]
+        counters[counter] += 1
         pts = word.segment_points(k)
-        if kind == "letter":
+        if kind in ("letter", "mark"):
             rec.log(
-                f"{root}/letters/{names[i]}",
+                f"{root}/letters/{names[i]}" if kind == "letter" else f"{root}/marks/{i}",
                 rr.LineStrips2D(
                     [flip(pts)],
                     colors=[INK],
                     radii=rr.Radius.ui_points(1.5),
-                    labels=[chars[i]],
+                    labels=[chars[i] if kind == "letter" else "mark"],
                     show_labels=False,
                     draw_order=10.0,
                 ),
@@ -232,17 +257,20 @@ def log_word(rec: rr.RecordingStream, word: WordTrajectory, root: str = "word") 
 
 
 def log_rollout(
-    rec: rr.RecordingStream, rollout: np.ndarray, duration_s: float, root: str = "word/rollout"
-) -> np.ndarray:
-    """Animate the DMP rollout on ``time``: pen point per sample, path segment per step.
+    rec: rr.RecordingStream,
+    samples: np.ndarray,
+    t: np.ndarray,
+    pen_down: np.ndarray,
+    root: str = "word/rollout",
+) -> None:
+    """Animate the word's motion on ``time``: pen point per sample, ink segment per step.
 
     Two :meth:`~rerun.RecordingStream.send_columns` calls: ``<root>/pen`` gets one point per
-    sample at ``linspace(0, duration_s, n)``; ``<root>/path`` gets the segment from sample
-    ``i - 1`` to ``i`` at sample ``i``'s time (``n - 1`` rows), drawn accumulated by the
-    blueprint. Returns the time grid, shape (n,).
+    sample at ``t``; ``<root>/path`` gets the segment from sample ``i - 1`` to ``i`` at sample
+    ``i``'s time where both are pen-down, drawn accumulated by the blueprint.
     """
-    pts = flip(_rollout(rollout))
-    t = np.linspace(0.0, float(duration_s), len(pts))
+    pts = flip(samples)
+    inked = np.flatnonzero(pen_down[1:] & pen_down[:-1]) + 1
     log_columns(
         rec,
         f"{root}/pen",
@@ -257,11 +285,10 @@ def log_rollout(
         f"{root}/path",
         rr.LineStrips2D.from_fields(colors=[PEN], radii=rr.Radius.ui_points(2.0), draw_order=20.0),
         TIMELINE,
-        t[1:],
-        rr.LineStrips2D.columns(strips=segments(pts)),
+        t[inked],
+        rr.LineStrips2D.columns(strips=segments(pts)[inked - 1]),
         strict=True,
     )
-    return t
 
 
 def log_decoded(rec: rr.RecordingStream, letters: np.ndarray, names: Sequence[str]) -> None:
@@ -284,10 +311,11 @@ def _summary(word: WordTrajectory, n_samples: int) -> str:
         f"# {word.text}",
         "",
         f"- letters: {kinds.count('letter')}, connections: {kinds.count('connection')}, "
-        f"pen-up travels: {kinds.count('space')}",
+        f"delayed strokes: {kinds.count('mark')}, "
+        f"pen-up travels: {sum(kind in PEN_UP_KINDS for kind in kinds)}",
         f"- points: {len(word.points)}, path length: {word.path_length:.2f} cm",
         f"- duration: {word.duration_s:.2f} s at {word.speed_cm_s:g} cm/s mean speed",
-        f"- DMP rollout: {n_samples} samples",
+        f"- motion: {n_samples} samples (the body's DMP rollout, then the delayed strokes)",
     ]
     if word.dmp is not None:
         lines.append(f"- DMP basis functions: {word.dmp.n_basis}")
@@ -367,7 +395,8 @@ def record_write(
     word : WordTrajectory
         The generated word (:func:`prg.pipeline.generate.write_word`).
     rollout : ndarray, shape (n, 2)
-        The DMP rollout in centimetres, on ``linspace(0, word.duration_s, n)``.
+        The body's DMP rollout in centimetres, on ``linspace(0, word.dmp.tau, n)`` (without a
+        DMP: on ``linspace(0, body duration, n)``); the delayed strokes are added to it.
     letters : ndarray, shape (N, k, 2), optional
         Raw normalised decoded letters (y up), one per non-space character of ``word.text``.
     images : ndarray, shape (N, H, W) or (N, 1, H, W), optional
@@ -395,7 +424,7 @@ def record_write(
     start = time.perf_counter()
     chars = [c for c in word.text if c != " "]
     names = _names(chars)
-    pts = _rollout(rollout)
+    pts, t, down = _motion(word, _rollout(rollout))
     imgs = None if images is None else _images(images, len(chars))
     raw = None if letters is None else _decoded(letters, len(chars))
     if audio is not None:
@@ -429,7 +458,7 @@ def record_write(
         if raw is not None:
             log_decoded(rec, raw, names)
         log_word(rec, word)
-        log_rollout(rec, pts, word.duration_s)
+        log_rollout(rec, pts, t, down)
     log.info(
         "recorded %r to %s in %.0f ms (%d rollout samples)",
         word.text,

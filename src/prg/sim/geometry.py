@@ -38,7 +38,6 @@ __all__ = [
     "distance_to_polylines",
     "in_contact",
     "max_ink_gap",
-    "min_jerk",
     "pen_down_samples",
     "place_points",
     "runs",
@@ -253,12 +252,6 @@ def runs(mask: ArrayLike) -> list[tuple[int, int]]:
     m = np.asarray(mask, dtype=bool).astype(np.int8)
     edges = np.diff(np.concatenate([[0], m, [0]]))
     return list(zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist()))
-
-
-def min_jerk(n: int) -> _Float:
-    """The minimum-jerk rest-to-rest profile ``10u^3 - 15u^4 + 6u^5`` on ``n`` samples of [0, 1]."""
-    u = np.linspace(0.0, 1.0, n)
-    return u**3 * (10.0 - 15.0 * u + 6.0 * u**2)
 
 
 # ----------------------------------------------------------------------------- ink and errors

@@ -24,7 +24,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from prg.errors import UsageError
 from prg.fields import FromMapping, at_least, positive
-from prg.sim.geometry import min_jerk, runs
+from prg.pipeline.timing import min_jerk
+from prg.sim.geometry import runs
 
 __all__ = ["PHASES", "MotionPlan", "MotionSettings", "plan_motion"]
 

@@ -73,15 +73,16 @@ def _check_duration(word: WordTrajectory, seconds: float, tempo: float) -> None:
 def word_samples(
     word: WordTrajectory, dt: float, tempo: float = 1.0
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
-    """The word's motion, sampled every ``dt`` seconds: its DMP rollout.
+    """The word's motion, sampled every ``dt`` seconds: the body's DMP rollout, then each delayed
+    stroke and the pen-up travel to it (:func:`prg.pipeline.timing.stroke_samples`).
 
     Parameters
     ----------
     word : WordTrajectory
-        With ``word.dmp`` (from ``prg-write``); without one, the points are followed at
-        ``word.speed_cm_s`` with 0.3 s speed ramps.
+        With ``word.dmp`` (from ``prg-write``; fitted to the body); without one, the body's
+        points are followed at ``word.speed_cm_s`` with 0.3 s speed ramps.
     dt : float
-        Sample spacing (s), about; the DMP's duration is divided evenly.
+        Sample spacing (s), about; each part's duration is divided evenly.
     tempo : float
         Multiplies the duration.
 
@@ -90,10 +91,15 @@ def word_samples(
     samples : ndarray, shape (n, 2)
         Centimetres, the word's own frame.
     t : ndarray, shape (n,)
-        Seconds from 0.
+        Seconds from 0, increasing.
     pen_down : ndarray of bool, shape (n,)
-        False on the pen-up travel between words.
+        False on the pen-up travel between words and to the delayed strokes.
     """
+    from prg.pipeline.timing import delayed_samples, rest_to_rest_samples
+
+    body = word.points[: word.body_end]
+    after_xy, after_t, after_down = delayed_samples(word, dt, tempo)
+    after_s = float(after_t[-1]) if len(after_t) else 0.0
     dmp = word.dmp
     if dmp is not None:
         from prg.pipeline.dmp import rollout
@@ -101,17 +107,20 @@ def word_samples(
         if dmp.dims != 2:
             raise UsageError(f"word {word.text!r}: the DMP must be 2-D, it has {dmp.dims} dims")
         tau = dmp.tau * tempo
-        _check_duration(word, tau, tempo)
+        _check_duration(word, tau + after_s, tempo)
         samples = rollout(dmp, tau=tau, dt=dt)
     else:
-        from prg.pipeline.timing import rest_to_rest_samples
-
-        _check_duration(word, word.path_length / word.speed_cm_s * tempo, tempo)
-        samples, tau = rest_to_rest_samples(word.points, word.speed_cm_s, 0.3, 1 / (dt * tempo))
+        body_s = float(np.linalg.norm(np.diff(body, axis=0), axis=1).sum()) / word.speed_cm_s
+        _check_duration(word, body_s * tempo + after_s, tempo)
+        samples, tau = rest_to_rest_samples(body, word.speed_cm_s, 0.3, 1 / (dt * tempo))
         tau *= tempo
     t = np.linspace(0.0, tau, len(samples))
-    down = pen_down_samples(word.points, word.segment, word.segment_kinds, samples)
-    return samples, t, down
+    down = pen_down_samples(body, word.segment[: word.body_end], word.segment_kinds, samples)
+    return (
+        np.concatenate([samples, after_xy]),
+        np.concatenate([t, tau + after_t]),
+        np.concatenate([down, after_down]),
+    )
 
 
 # ----------------------------------------------------------------------------- result

@@ -1,0 +1,172 @@
+"""Delayed strokes: the dots of ``i`` and ``j`` and the bars of ``t`` and ``f``.
+
+People write a word in one cursive movement, then go back to dot the i's and cross the t's. The
+models decode single strokes (the paper keeps only single-stroke samples; the synthetic source
+drops the dots), so after the cursive body the word gets its **marks**, each a separate pen-down
+stroke reached by a pen-up travel, left to right. They are placed by explicit rules from each
+letter's own laid-out geometry (centimetres, baseline ``y = 0``, :mod:`prg.pipeline.layout`) and
+sized with the letter:
+
+* **dot** (letters in ``MarkSettings.dotted``): a small circle of radius ``dot_radius * H``
+  centred above the stem's top: at the x of the letter's highest point (where the stem of an
+  ``i`` or ``j`` ends), ``dot_gap * H`` above that point plus the radius;
+* **bar** (letters in ``MarkSettings.crossed``): a straight stroke ``bar_width * H`` long, left
+  to right, at the x-height line (``bar_height`` times the x-height; kept inside the letter's
+  own height band, see :func:`bar_height_cm`), centred on the stem: the crossing of the letter's
+  path with that line nearest the letter's highest point.
+
+``H`` is ``LayoutSettings.letter_height`` times the letter's own scale (1 unless the layout's width
+guard made the letter shorter than its band; at least :data:`MIN_SCALE`), so a mark keeps its
+proportion to its letter.
+
+The paper's single stroke is ``GenerateSettings.delayed_strokes=False``. How the marks are timed
+(straight, minimum-jerk rest-to-rest strokes, not DMPs) is in :mod:`prg.pipeline.timing`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from prg.alphabet import unsupported_chars
+from prg.checks import MARK_RANGES
+from prg.errors import SettingsError
+from prg.fields import check_ranges
+from prg.pipeline.layout import LayoutSettings, letter_band
+
+DOT_POINTS = 13  # a closed circle: 12 chords (under 0.01 mm from the true circle)
+BAR_STEP_CM = 0.05  # the bar's points are this far apart (as the connection strokes' delta)
+
+
+@dataclass(frozen=True)
+class MarkSettings:
+    """Which letters get a delayed stroke and its size (fractions of the letter height ``H``).
+
+    dotted : letters that get a dot above the stem (``"ij"``).
+    crossed : letters that get a bar across the stem (``"tf"``; add ``x`` for a crossed x).
+    dot_gap : space between the stem's top and the dot (0.2 H: 0.4 of the x-height).
+    dot_radius : the dot's radius (0.015 H: 0.22 mm for a 1.5 cm letter; a circle that small
+        under a 0.4 mm pen inks a filled dot, not a ring).
+    bar_width : length of a bar (0.4 H).
+    bar_height : height of a bar as a fraction of the x-height (1.0: on the x-height line).
+    """
+
+    dotted: str = "ij"
+    crossed: str = "tf"
+    dot_gap: float = 0.2
+    dot_radius: float = 0.015
+    bar_width: float = 0.4
+    bar_height: float = 1.0
+
+    def __post_init__(self) -> None:
+        check_ranges(self, MARK_RANGES)
+        for name in ("dotted", "crossed"):
+            value = getattr(self, name)
+            if not isinstance(value, str) or unsupported_chars(value) or " " in value:
+                raise SettingsError(name, f"{value!r}: give letters from 0-9, A-Z, a-z")
+        both = sorted(set(self.dotted) & set(self.crossed))
+        if both:
+            raise SettingsError("crossed", f"{both[0]!r} is also dotted: one mark per letter")
+
+    def mark_of(self, char: str) -> str | None:
+        """``"dot"``, ``"bar"`` or None for a character."""
+        if char in self.dotted:
+            return "dot"
+        if char in self.crossed:
+            return "bar"
+        return None
+
+
+MIN_SCALE = 0.25  # marks of a letter the width guard flattened keep a quarter of their size
+
+
+def _scale(points: np.ndarray, char: str, layout: LayoutSettings) -> float:
+    """The letter's height over its band's: 1 unless the width guard shrank it, and at least
+    :data:`MIN_SCALE`."""
+    bottom, top = letter_band(char, layout)
+    height = float(np.ptp(points[:, 1]))
+    return float(np.clip(height / (top - bottom), MIN_SCALE, 1.0)) if top > bottom else 1.0
+
+
+def dot_for(points: np.ndarray, char: str, settings: MarkSettings, layout: LayoutSettings):
+    """The dot above a laid-out letter: a closed circle, shape (DOT_POINTS, 2), starting at its
+    top and going counter-clockwise."""
+    h = layout.letter_height * _scale(points, char, layout)
+    top = points[int(np.argmax(points[:, 1]))]
+    radius = settings.dot_radius * h
+    centre = top + np.array([0.0, settings.dot_gap * h + radius])
+    angle = np.pi / 2 + np.linspace(0.0, 2 * np.pi, DOT_POINTS)
+    return centre + radius * np.column_stack([np.cos(angle), np.sin(angle)])
+
+
+def bar_height_cm(points: np.ndarray, layout: LayoutSettings, settings: MarkSettings) -> float:
+    """The bar's height: ``bar_height`` times the x-height, kept between 20 % and 85 % of the
+    letter's own height so that the bar crosses the stem even on a letter the layout shrank."""
+    low, high = float(points[:, 1].min()), float(points[:, 1].max())
+    wanted = settings.bar_height * layout.x_height * layout.letter_height
+    return float(np.clip(wanted, low + 0.2 * (high - low), low + 0.85 * (high - low)))
+
+
+def stem_crossings(points: np.ndarray, y: float) -> np.ndarray:
+    """x of every crossing of the path ``points`` (n, 2) with the line at height ``y``."""
+    y0, y1 = points[:-1, 1], points[1:, 1]
+    span = (np.minimum(y0, y1) <= y) & (np.maximum(y0, y1) >= y) & (y0 != y1)
+    u = (y - y0[span]) / (y1[span] - y0[span])
+    return points[:-1, 0][span] + u * (points[1:, 0][span] - points[:-1, 0][span])
+
+
+def bar_for(points: np.ndarray, char: str, settings: MarkSettings, layout: LayoutSettings):
+    """The bar across a laid-out letter's stem, left to right, shape (n, 2)."""
+    h = layout.letter_height * _scale(points, char, layout)
+    y = bar_height_cm(points, layout, settings)
+    top_x = points[int(np.argmax(points[:, 1])), 0]
+    crossings = stem_crossings(points, y)
+    # a path from its lowest to its highest point crosses every height between: never empty
+    x = crossings[int(np.argmin(np.abs(crossings - top_x)))] if len(crossings) else top_x
+    half = settings.bar_width * h / 2
+    n = max(2, int(np.ceil(2 * half / BAR_STEP_CM)) + 1)
+    return np.column_stack([np.linspace(x - half, x + half, n), np.full(n, y)])
+
+
+def letter_marks(
+    letters: list[np.ndarray],
+    text: str,
+    settings: MarkSettings | None = None,
+    layout: LayoutSettings | None = None,
+) -> list[tuple[int, str, np.ndarray]]:
+    """The delayed strokes of laid-out letters, in writing order (left to right).
+
+    Parameters
+    ----------
+    letters : list of ndarray, each shape (n_i, 2)
+        The letters in centimetres (:func:`prg.pipeline.layout.layout_letters`), one per
+        non-space character of ``text``.
+    text : str
+    settings, layout : optional
+
+    Returns
+    -------
+    list of (letter index, ``"dot"`` or ``"bar"``, points (m, 2))
+    """
+    settings = settings or MarkSettings()
+    layout = layout or LayoutSettings()
+    chars = [c for c in text if c != " "]
+    out = []
+    for i, (char, points) in enumerate(zip(chars, letters)):
+        kind = settings.mark_of(char)
+        if kind == "dot":
+            out.append((i, kind, dot_for(points, char, settings, layout)))
+        elif kind == "bar":
+            out.append((i, kind, bar_for(points, char, settings, layout)))
+    return out
+
+
+__all__ = [
+    "MarkSettings",
+    "bar_for",
+    "bar_height_cm",
+    "dot_for",
+    "letter_marks",
+    "stem_crossings",
+]

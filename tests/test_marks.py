@@ -1,0 +1,172 @@
+"""Delayed strokes (i/j dots, t/f bars): placed on every letter that needs one, judged by the
+geometric check, and carried through the word file, the figures, the motion, the recording, the
+simulated robot and the study stimuli."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from prg.alphabet import ALPHABET, char_to_label
+from prg.errors import SettingsError, UsageError
+from prg.evaluation.marks import check_marks, check_writer, marks_figure, random_words
+from prg.pipeline.compose import GenerateSettings, compose_word
+from prg.pipeline.marks import MarkSettings
+from prg.pipeline.word import WordTrajectory, assemble_word
+from prg.sim import word_samples
+from prg.sim.geometry import runs
+
+
+@pytest.fixture(scope="module")
+def dataset_letters(small_dataset):
+    """Letters of the prepared synthetic dataset by class: the handwriting the models learn."""
+    split = np.load(small_dataset / "prepared" / "synthetic" / "train.npz")
+    traj, label = split["traj"], split["label"]
+    return {c: traj[label == char_to_label(c)].reshape(-1, 100, 2) for c in ALPHABET}
+
+
+def _writer(letters_by_class, params=None, seed=0):
+    rng = np.random.default_rng(seed)
+
+    def write(text: str) -> WordTrajectory:
+        chars = text.replace(" ", "")
+        letters = [letters_by_class[c][rng.integers(len(letters_by_class[c]))] for c in chars]
+        return compose_word(np.stack(letters), text, params)[0]
+
+    return write
+
+
+def test_every_class_and_200_random_words_have_their_marks(dataset_letters, tmp_path):
+    check = check_writer(_writer(dataset_letters), n_words=200, seed=1, progress=False)
+    summary = check.summary()
+    assert summary["failures"] == {}
+    assert summary["classes_passed"] == 62 and summary["words_passed"] == 200
+    # every dotted or crossed letter of the words got exactly one mark
+    needed = sum(sum(c in "ijtf" for c in text) for text in [*ALPHABET, *random_words(200, 1)])
+    assert summary["marks_checked"] == needed > 50
+    figure = marks_figure(check, tmp_path / "marks.png")
+    assert figure.stat().st_size > 10_000
+
+
+def test_marks_sit_where_the_rules_say(dataset_letters):
+    word = _writer(dataset_letters)("itjf")
+    marks = [word.segment_points(k) for k, kind in enumerate(word.segment_kinds) if kind == "mark"]
+    assert len(marks) == 4
+    settings, layout = MarkSettings(), GenerateSettings().layout
+    for (char, letter), mark in zip(word.letters, marks):
+        top = letter[np.argmax(letter[:, 1])]
+        height = np.ptp(letter[:, 1])
+        if char in "ij":  # a closed circle above the stem's top, at the stem's x
+            centre = (mark.min(axis=0) + mark.max(axis=0)) / 2
+            np.testing.assert_allclose(mark[0], mark[-1], atol=1e-12)
+            assert centre[0] == pytest.approx(top[0], abs=1e-9)
+            scale = np.clip(height / (layout.x_height * layout.letter_height), 0.25, 1.0)
+            gap = mark[:, 1].min() - top[1]
+            assert gap == pytest.approx(settings.dot_gap * layout.letter_height * scale, rel=1e-6)
+        else:  # a horizontal bar, left to right, crossing the letter's path
+            assert np.all(np.diff(mark[:, 0]) > 0) and np.ptp(mark[:, 1]) == 0
+            y = mark[0, 1]
+            assert letter[:, 1].min() < y < letter[:, 1].max()
+
+
+def test_the_check_fails_when_a_mark_is_missing_or_misplaced(dataset_letters):
+    word = _writer(dataset_letters)("tie")
+    assert check_marks(word) == []
+    marks = [k for k, kind in enumerate(word.segment_kinds) if kind == "mark"]
+    bar, dot = (word.segment == marks[0]), (word.segment == marks[1])
+
+    def moved(mask, shift):
+        points = word.points.copy()
+        points[mask] += shift
+        return WordTrajectory(points, word.segment, word.segment_kinds, word.text)
+
+    (_, t_points), (_, i_points) = word.letters[0], word.letters[1]
+    below = moved(dot, [0.0, i_points[:, 1].min() - word.points[dot, 1].max() - 0.1])
+    assert check_marks(below) == [
+        "'i' (letter 2) has no dot above its stem",
+        "1 mark(s) belong to no letter that needs one",
+    ]
+    aside = moved(dot, [i_points[:, 0].max() - word.points[dot, 0].min() + 0.3, 0.0])
+    assert "'i' (letter 2) has no dot above its stem" in check_marks(aside)
+    above = moved(bar, [0.0, t_points[:, 1].max() + 0.2 - word.points[bar, 1].min()])
+    assert "'t' (letter 1) has no bar across its stem" in check_marks(above)
+    single = compose_word(
+        np.stack([p / np.abs(p).max() for _, p in word.letters]),
+        "tie",
+        GenerateSettings(delayed_strokes=False),
+    )[0]
+    assert check_marks(single) == [
+        "'t' (letter 1) has no bar across its stem",
+        "'i' (letter 2) has no dot above its stem",
+    ]
+    # a mark on a letter that needs none is reported too
+    extra = check_marks(word, MarkSettings(dotted="j", crossed="f"))
+    assert extra == ["2 mark(s) belong to no letter that needs one"]
+
+
+def test_delayed_strokes_false_is_the_papers_single_stroke(dataset_letters):
+    write = _writer(dataset_letters, GenerateSettings(delayed_strokes=False))
+    word = write("quiz")
+    assert "mark" not in word.segment_kinds and word.body_end == len(word.points)
+    assert len(runs(word.pen_down())) == 1
+
+
+def test_the_motion_writes_the_body_then_lifts_to_each_mark(dataset_letters):
+    word = _writer(dataset_letters)("quiz jut")
+    samples, t, down = word_samples(word, dt=1 / 60)
+    assert np.all(np.diff(t) > 0) and t[-1] == pytest.approx(word.duration_s, rel=1e-9)
+    # strokes: "quiz", "jut", then the dots of i and j and the bar of t, in that order
+    strokes = [samples[a:b] for a, b in runs(down)]
+    assert len(strokes) == 5
+    marks = [word.segment_points(k) for k, kind in enumerate(word.segment_kinds) if kind == "mark"]
+    for stroke, mark in zip(strokes[2:], marks):
+        np.testing.assert_allclose(stroke[0], mark[0], atol=1e-9)  # the pen lowers on it
+        np.testing.assert_allclose(stroke[-1], mark[-1], atol=1e-9)
+    np.testing.assert_allclose(samples[0], word.points[0], atol=1e-9)  # the DMP's start
+    tempo_2 = word_samples(word, dt=1 / 60, tempo=2.0)[1]
+    assert tempo_2[-1] == pytest.approx(2 * word.duration_s, rel=1e-9)
+
+
+def test_the_word_file_keeps_the_marks_and_reads_version_1(dataset_letters, tmp_path):
+    word = _writer(dataset_letters)("kit")
+    path = word.to_json(tmp_path / "word.json")
+    back = WordTrajectory.from_json(path)
+    assert back.segment_kinds == word.segment_kinds and back.body_end == word.body_end
+    np.testing.assert_array_equal(back.points, word.points)
+    old = _writer(dataset_letters, GenerateSettings(delayed_strokes=False))("kit").to_dict()
+    old["version"] = 1
+    (tmp_path / "v1.json").write_text(json.dumps(old))
+    assert WordTrajectory.from_json(tmp_path / "v1.json").segment_kinds.count("mark") == 0
+
+
+def test_figures_draw_marks_as_ink_and_no_lift(dataset_letters, tmp_path):
+    word = _writer(dataset_letters)("it")
+    ink = word.to_svg(tmp_path / "ink.svg", highlight=False).read_text()
+    assert ink.count('class="mark"') == 2 and 'class="lift"' not in ink
+    shown = word.to_svg(tmp_path / "shown.svg").read_text()
+    assert shown.count('class="lift"') == 2
+    pieces = word.polylines(highlight=False)
+    for (_, pts), mark in zip(
+        [p for p in pieces if p[0] == "mark"],
+        [word.segment_points(k) for k, kind in enumerate(word.segment_kinds) if kind == "mark"],
+    ):
+        np.testing.assert_array_equal(pts, mark)  # a stroke of its own, not joined to the word
+
+
+def test_segments_out_of_order_and_bad_settings_are_refused(dataset_letters):
+    word = _writer(dataset_letters)("i")
+    kinds = list(word.segment_kinds)
+    with pytest.raises(UsageError, match="delayed strokes must come after the body"):
+        WordTrajectory(word.points, word.segment, [*kinds[:-2], "mark", "lift"], word.text)
+    with pytest.raises(UsageError, match="shape"):
+        assemble_word([word.letters[0][1]], [], "i", marks=[np.zeros((1, 2))])
+    with pytest.raises(SettingsError, match="dot_radius"):
+        MarkSettings(dot_radius=0)
+    with pytest.raises(SettingsError, match="'t' is also dotted"):
+        MarkSettings(dotted="it", crossed="t")
+    with pytest.raises(SettingsError, match="dotted"):
+        MarkSettings(dotted="i!")
+    with pytest.raises(SettingsError, match="delayed_strokes"):
+        GenerateSettings(delayed_strokes="yes")
