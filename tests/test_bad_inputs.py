@@ -41,6 +41,7 @@ HYDRA_COMMANDS = (
     "prg-write",
     "prg-dictaphone",
     "prg-simulate",
+    "prg-export",
 )
 
 
@@ -388,6 +389,24 @@ CASES = [
         2,
         "robot.urdf=${oc.env:PRG_NO_SUCH_VAR} cannot be resolved",
     ),
+    # ---- prg-export
+    case("export-no-word", "prg-export", [], 2, "give word=WORD.json"),
+    case("export-unknown-format", "prg-export", "word={word} formats=[dxf]", 2, "dxf"),
+    case("export-word-without-dmp", "prg-export", "word={no_dmp_word}", 2, "DMP"),
+    case("export-page-too-small", "prg-export", "word={word} plotter.paper_mm=[20,10]", 2, "mm"),
+    case(
+        "export-unreachable",
+        "prg-export",
+        "word={word} formats=[mcap] scale=40 workspace_step_cm=4",
+        2,
+        "cm wide",
+    ),
+    case("export-corrupt-word", "prg-export", "word={bad_json}", 2, "not valid JSON"),
+    case("export-out-below-file", "prg-export", "word={word} out_dir={file}/x", 2, "a-file"),
+    case("export-servo-garbage", "prg-export", "word={word} gcode.pen=laser", 2, "gcode.pen"),
+    case(
+        "export-zero-slow-down", "prg-export", "word={word} limits.max_slow_down=0", 2, "max_slow"
+    ),
     # ---- prg-study
     case("study-no-command", "prg-study", [], 2, "choose a command"),
     case("study-missing-file", "prg-study", "build {tmp}/nope.yaml", 2, "no such study file"),
@@ -573,6 +592,7 @@ COMMON = {
     "prg-write": ["mlflow=false", "ckpt={ckpt}"],
     "prg-dictaphone": ["mlflow=false", "ckpt={ckpt}"],
     "prg-simulate": ["mlflow=false", "record=false", "progress=false", "ckpt={ckpt}"],
+    "prg-export": ["progress=false"],
     "prg-study": [],
 }
 
@@ -656,6 +676,10 @@ def bad_files(tmp: Path, checkpoint: Path) -> dict[str, Path]:
     slow["dmp"]["tau"] = slow["duration_s"] = 3600.0  # an hour of writing
     files["slow_word"] = tmp / "slow-word.json"
     files["slow_word"].write_text(json.dumps(slow))
+    no_dmp = json.loads(files["word"].read_text())
+    no_dmp["dmp"] = None
+    files["no_dmp_word"] = tmp / "no-dmp-word.json"
+    files["no_dmp_word"].write_text(json.dumps(no_dmp))
     files["long_wav"] = tmp / "long.wav"  # 40 s: longer than speech.max_seconds (30 s)
     _wav(files["long_wav"], np.zeros(40 * 16000))
     return files

@@ -31,6 +31,8 @@ CONFIGS = [
     ("dictaphone", []),
     ("simulate", []),
     ("simulate", ["robot=iiwa"]),
+    ("export", []),
+    ("export", ["robot=iiwa"]),
 ]
 
 

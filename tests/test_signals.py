@@ -234,6 +234,13 @@ def _simulate(tmp, dataset, checkpoint):
     ]
 
 
+def _export(tmp, dataset, checkpoint):
+    from prg.sim import font_word
+
+    word = font_word("ok").to_json(tmp / "word.json")
+    return [str(BIN / "prg-export"), f"paths.root_dir={tmp}", f"word={word}", f"out_dir={tmp}/out"]
+
+
 def _study(tmp, dataset, checkpoint):
     return [
         str(BIN / "prg-study"),
@@ -271,6 +278,7 @@ COMMANDS = {
     "prg-write": _write,
     "prg-dictaphone": _dictaphone,
     "prg-simulate": _simulate,
+    "prg-export": _export,
     "prg-study": _study,
     "prg.commands.paper_scale": _paper_scale,
 }

@@ -14,7 +14,7 @@ from prg.errors import UsageError
 from prg.pipeline.connect import ConnectionSettings, connect_sequence
 from prg.pipeline.dmp import DMP, fit_dmp
 from prg.pipeline.layout import layout_letters, word_breaks
-from prg.pipeline.word import WordTrajectory, _atomic_write, assemble_word
+from prg.pipeline.word import SCHEMA_VERSION, WordTrajectory, _atomic_write, assemble_word
 from tests.conftest import letter_like
 
 TEXT = "ab cd"
@@ -81,7 +81,7 @@ def test_json_round_trip_is_exact(word, tmp_path):
     assert back.text == word.text
     assert isinstance(back.dmp, DMP) and back.dmp.to_dict() == word.dmp.to_dict()
     assert (back.speed_cm_s, back.duration_s) == (word.speed_cm_s, word.duration_s)
-    assert json.loads(path.read_text())["version"] == 1
+    assert json.loads(path.read_text())["version"] == SCHEMA_VERSION == 2
 
 
 def test_the_dmp_is_stored_as_its_to_dict_and_rewritten_byte_for_byte(word, tmp_path):

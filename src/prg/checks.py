@@ -140,6 +140,34 @@ EVALUATION_RANGES: dict[str, Range] = {  # prg.evaluation.settings.EvaluationSet
 }
 
 
+PLOTTER_RANGES: dict[str, Range] = {  # prg.export.PlotterSettings (conf/export.yaml ``plotter``)
+    "paper_mm": positive(10_000),
+    "position_mm": Range(-10_000, 10_000, optional=True),
+    "scale": positive(1000),
+}
+GCODE_RANGES: dict[str, Range] = {  # prg.export.GcodeSettings (conf/export.yaml ``gcode``)
+    "origin_mm": Range(-10_000, 10_000),
+    "z_up_mm": Range(-1000, 1000),
+    "z_down_mm": Range(-1000, 1000),
+    "z_feed_mm_min": positive(1_000_000),
+    "servo_wait_s": non_negative(60),
+    "max_feed_mm_min": Range(0, 1_000_000, low_open=True, optional=True),
+    "decimals": count(2, 6),
+}
+HPGL_RANGES: dict[str, Range] = {  # prg.export.HpglSettings (conf/export.yaml ``hpgl``)
+    "velocity": count(1, 100, optional=True),  # VS, cm/s
+}
+LIMIT_RANGES: dict[str, Range] = {  # prg.export.LimitSettings (conf/export.yaml ``limits``)
+    "max_slow_down": Range(1, 1000),
+    "contact_above_mm": Range(0, 100, optional=True),
+    "compliance_mm": Range(0, 100, optional=True),
+}
+EXPORT_RANGES: dict[str, Range] = {  # prg.export.ExportSettings' own numbers
+    "tempo": Range(0, 10, low_open=True),
+    "sample_dt_s": Range(0, 0.1, low_open=True),
+}
+
+
 def _under(prefix: str, ranges: dict[str, Range]) -> dict[str, Range]:
     return {f"{prefix}.{name}": spec for name, spec in ranges.items()}
 
@@ -269,6 +297,18 @@ RANGES: dict[str, Range] = {
     "robot.pen_radius": positive(1),
     "robot.base_position": METRES,
     "robot.base_yaw_deg": DEGREES,
+    # prg-export
+    "sample_dt_s": EXPORT_RANGES["sample_dt_s"],
+    "plotter.paper_mm": PLOTTER_RANGES["paper_mm"],
+    "plotter.position_mm": PLOTTER_RANGES["position_mm"],
+    **_under("gcode", GCODE_RANGES),
+    **_under("hpgl", HPGL_RANGES),
+    **_under("limits", LIMIT_RANGES),
+    "limits.joints.*.lower": DEGREES,  # rad
+    "limits.joints.*.upper": DEGREES,
+    "limits.joints.*.velocity": positive(1000),  # rad/s
+    "limits.joints.*.acceleration": positive(1e5),  # rad/s^2
+    "limits.joints.*.jerk": positive(1e7),  # rad/s^3
 }
 
 
