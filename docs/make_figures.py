@@ -2,8 +2,10 @@
 
     python docs/make_figures.py
 
-docs/figures/word.png: "hello" from its labels (conf/write.yaml's settings, as `prg-write
-text=hello`): letters, connection strokes, the DMP's rollout. docs/figures/robot.png: the Panda
+docs/figures/word.png: "little" from its labels (conf/write.yaml's settings, as `prg-write
+text=little`): letters, connection strokes, delayed strokes, the DMP's rollout.
+docs/figures/marks.png: the geometric check of the delayed strokes (dots of i/j, bars of t/f) on
+the 62 classes and 200 random words (prg.evaluation.marks). docs/figures/robot.png: the Panda
 writing "joy" (as `prg-simulate text=joy scale=6`), a TinyRenderer 3/4 view with a close-up of
 the page. docs/figures/README.md: captions naming the checkpoint and its SHA-256. Atomic writes.
 """
@@ -21,7 +23,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 CKPT = ROOT / "models" / "muse" / "model.ckpt"
 OUT = ROOT / "docs" / "figures"
-WORD, ROBOT_WORD, SCALE = "hello", "joy", 6.0  # SCALE: the robot's word, enlarged to be seen
+WORD, ROBOT_WORD, SCALE = "little", "joy", 6.0  # SCALE: the robot's word, enlarged to be seen
 EYE, TARGET = (-0.4, 1.0, 1.45), (0.42, 0.02, 0.85)  # world (m): the arm, table and page
 CLOSE_EYE, CLOSE_TARGET = (0.31, 0.11, 0.82), (0.55, -0.01, 0.6255)  # the page, near the pen
 LIGHT, SUPERSAMPLE, INK_MM = (-0.2, 0.5, 1.0), 2, 3.5  # ink drawn wide to show at this size
@@ -39,7 +41,8 @@ def save_atomic(path: Path, save) -> None:
 
 
 def word_figure(writer, path: Path) -> str:
-    """``WORD``: letters (black), connection strokes (red); beside it the DMP's rollout by time."""
+    """``WORD``: letters (black), connection strokes (red), delayed strokes (purple); beside it
+    the body's DMP rollout by time and the delayed strokes after it."""
     from matplotlib.collections import LineCollection
 
     from prg.pipeline.timing import rest_to_rest_samples
@@ -48,19 +51,22 @@ def word_figure(writer, path: Path) -> str:
     result = writer.write(text=WORD)
     word, rollout = result.word, result.rollout
     p = writer.settings
-    target, _ = rest_to_rest_samples(word.points, p.speed_cm_s, p.ramp_s, p.samples_per_s)
+    target, _ = rest_to_rest_samples(word.body, p.speed_cm_s, p.ramp_s, p.samples_per_s)
     rmse_mm = 10 * float(np.sqrt(np.mean(np.sum((rollout - target) ** 2, axis=1))))
     plt = pyplot()
     fig, (left, right) = plt.subplots(1, 2, figsize=(9, 3), dpi=100, layout="constrained")
-    for kind, pts in word.polylines():
-        colour = {"letter": "black", "connection": "tab:red"}.get(kind, "grey")
-        left.plot(*pts.T, color=colour, lw=2.5, solid_capstyle="round", solid_joinstyle="round")
-    left.set_title("letters (black) and connection strokes (red)", fontsize=10)
-    t = np.linspace(0.0, word.duration_s, len(rollout))
+    colours = {"letter": "black", "connection": "tab:red", "mark": "tab:purple"}
+    for kind, pts in word.polylines(highlight=False):
+        left.plot(*pts.T, color=colours[kind], lw=2.5, solid_capstyle="round")
+    left.set_title("letters, connection strokes (red), dots and bars (purple)", fontsize=10)
+    t = np.linspace(0.0, word.dmp.tau, len(rollout))
     segments = np.stack([rollout[:-1], rollout[1:]], axis=1)
     lines = LineCollection(segments, array=t[:-1], cmap="viridis", lw=2.5, capstyle="round")
     right.add_collection(lines)
-    right.set_title("one DMP's rollout", fontsize=10)
+    for kind, pts in word.polylines(highlight=False):
+        if kind == "mark":
+            right.plot(*pts.T, color="tab:purple", lw=2.5, solid_capstyle="round")
+    right.set_title("one DMP's rollout, then the dots and bars", fontsize=10)
     bar = fig.colorbar(lines, ax=right, shrink=0.7, aspect=15, pad=0.01)
     bar.set_label("time (s)")
     for ax in (left, right):
@@ -72,8 +78,28 @@ def word_figure(writer, path: Path) -> str:
     plt.close(fig)
     return (
         f'"{WORD}" written by the demo MUSE from its letters\' labels: {len(word.points)} points, '
-        f"{word.path_length:.1f} cm of pen path in {word.duration_s:.1f} s; one DMP with "
-        f"{word.dmp.n_basis} basis functions reproduces it with RMSE {rmse_mm:.3f} mm."
+        f"{word.path_length:.1f} cm of pen path (pen-up travel included) in "
+        f"{word.duration_s:.1f} s; one DMP with {word.dmp.n_basis} basis functions reproduces the "
+        f"cursive body ({word.dmp.tau:.1f} s) with RMSE {rmse_mm:.3f} mm, then the pen lifts to "
+        f"dot and cross ({word.segment_kinds.count('mark')} delayed strokes)."
+    )
+
+
+def marks_figure(writer, path: Path) -> str:
+    """The geometric check of the delayed strokes on the 62 classes and 200 random words."""
+    from prg.evaluation.marks import check_writer
+    from prg.evaluation.marks import marks_figure as draw
+
+    check = check_writer(lambda text: writer.write(text=text).word, n_words=200, seed=0)
+    draw(check, path)
+    s = check.summary()
+    failed = "; ".join(f"{w!r}: {' '.join(p)}" for w, p in list(s["failures"].items())[:5])
+    return (
+        f"Delayed strokes written by the demo MUSE from letter labels, checked on geometry "
+        f"(`prg.evaluation.marks`): {s['classes_passed']}/{s['classes']} classes and "
+        f"{s['words_passed']}/{s['words']} random words pass ({s['marks_checked']} dots and "
+        f"bars: each dot above its stem within the letter's column, each bar crossing its "
+        f"stem, no mark left over)" + (f"; failures: {failed}." if failed else ".")
     )
 
 
@@ -137,14 +163,18 @@ def main() -> None:
     OUT.mkdir(parents=True, exist_ok=True)
     word_caption = word_figure(writer, OUT / "word.png")
     robot_caption = robot_figure(writer, cfg, OUT / "robot.png")
+    marks_caption = marks_figure(writer, OUT / "marks.png")
     text = (
         "# Figures\n\nGenerated by `python docs/make_figures.py` from "
         f"`{CKPT.relative_to(ROOT)}` (SHA-256 `{digest}...`); do not edit by hand.\n\n"
         f"![word](word.png)\n\n**word.png.** {word_caption}\n\n"
-        f"![robot](robot.png)\n\n**robot.png.** {robot_caption}\n"
+        f"![robot](robot.png)\n\n**robot.png.** {robot_caption}\n\n"
+        f"![marks](marks.png)\n\n**marks.png.** {marks_caption}\n"
     )
     save_atomic(OUT / "README.md", lambda tmp: tmp.write_text(text, encoding="utf-8"))
-    print(f"docs/figures: word.png, robot.png, README.md in {time.perf_counter() - start:.0f} s")
+    print(
+        f"docs/figures: word.png, robot.png, marks.png, README.md in {time.perf_counter() - start:.0f} s"
+    )
 
 
 if __name__ == "__main__":

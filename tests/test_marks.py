@@ -170,3 +170,42 @@ def test_segments_out_of_order_and_bad_settings_are_refused(dataset_letters):
         MarkSettings(dotted="i!")
     with pytest.raises(SettingsError, match="delayed_strokes"):
         GenerateSettings(delayed_strokes="yes")
+
+
+def test_the_recording_draws_the_marks_and_no_ink_over_a_lift(dataset_letters, tmp_path):
+    from prg.recording import read_component, read_entities, read_times, record_write
+
+    letters = [dataset_letters[c][0] for c in "it"]
+    word, rollout = compose_word(np.stack(letters), "it")
+    path = record_write(tmp_path / "word.rrd", word, rollout)
+    entities = read_entities(path)
+    assert {"word/marks/0", "word/marks/1", "word/pen_up/0", "word/pen_up/1"} <= set(entities)
+    times = read_times(path, "word/rollout/pen", "time")
+    assert times[-1] == pytest.approx(word.duration_s, abs=1e-6)
+    assert times[len(rollout) - 1] == pytest.approx(word.dmp.tau, abs=1e-6)
+    # every inked segment lies on the body or on a mark, none on the travel between them
+    segments = np.concatenate(
+        [
+            np.array(row[0])
+            for row in read_component(path, "word/rollout/path", "LineStrips2D:strips", "time")
+        ]
+    )
+    marks = [word.segment_points(k) for k, kind in enumerate(word.segment_kinds) if kind == "mark"]
+    ink = np.concatenate([word.body, *marks]) * [1.0, -1.0]  # recorded y-flipped
+    nearest = np.min(np.linalg.norm(segments[:, None, :] - ink[None], axis=2), axis=1)
+    assert nearest.max() < 0.05  # cm: the DMP's rollout and the timed marks follow the ink
+    lifts = np.concatenate(
+        [word.segment_points(k) for k, kind in enumerate(word.segment_kinds) if kind == "lift"]
+    )
+    assert len(lifts) > 3 and len(segments) > 100
+
+
+def test_the_study_stimulus_shows_the_marks(dataset_letters):
+    from studies.stimuli import word_strokes
+
+    word = _writer(dataset_letters)("tilt")
+    strokes = word_strokes(word)
+    assert len(strokes) == 1 + 3  # the word, then the two bars and the dot
+    marks = [word.segment_points(k) for k, kind in enumerate(word.segment_kinds) if kind == "mark"]
+    for stroke, mark in zip(strokes[1:], marks):
+        np.testing.assert_array_equal(stroke, mark)

@@ -41,7 +41,8 @@ def _config(robot: str = "panda", **changes):
 
 @pytest.fixture(scope="module")
 def panda_hi():
-    """'hi' written by the Panda with the default settings of conf/simulate.yaml."""
+    """'hi' written by the Panda with the default settings of conf/simulate.yaml: the word in one
+    stroke, then the i's dot."""
     robot, settings = _config()
     return simulate_word(font_word("hi"), robot, settings)
 
@@ -51,7 +52,7 @@ def test_a_short_word_is_written_within_half_a_millimetre_without_ink_gaps(panda
     assert m["tracking_error_mean_mm"] < 0.5
     assert m["tracking_error_max_mm"] < 0.5
     assert 0 < m["max_ink_gap_mm"] <= m["pen_step_mm"]
-    assert m["ink_strokes"] == m["commanded_strokes"] == 1
+    assert m["ink_strokes"] == m["commanded_strokes"] == 2  # the word, then the i's dot
     assert m["sim_s"] > m["writing_s"] > 0
 
 
@@ -60,7 +61,7 @@ def test_the_pen_inks_only_between_lowering_and_lifting(panda_hi):
     heights = r.tip_paper[:, 2]
     assert not r.contact[0] and not r.contact[-1]
     assert heights[0] > 10 and heights[-1] > 10  # starts and ends home, well above the paper
-    assert np.all(r.step_stroke[r.contact] == 0)  # all ink belongs to the commanded stroke
+    assert set(r.step_stroke[r.contact]) == {0, 1}  # all ink belongs to the commanded strokes
     assert np.all(np.abs(heights[r.contact]) <= 0.05)
 
 
@@ -69,6 +70,23 @@ def test_the_ink_lands_where_the_word_was_placed(panda_hi):
     low, high = bounding_box(np.concatenate(r.ink_strokes()))
     assert_allclose((low + high) / 2, r.placement["centre_cm"], atol=0.01)
     assert_allclose(high - low, [r.placement["width_cm"], r.placement["height_cm"]], atol=0.01)
+
+
+def test_the_dot_is_inked_above_the_stem_after_a_pen_lift(panda_hi):
+    r = panda_hi
+    word_ink, dot_ink = r.ink_strokes()
+    # on the paper the word is placed centred and scaled: map the word's own dot there
+    word = font_word("hi")
+    (dot,) = [word.segment_points(k) for k, kind in enumerate(word.segment_kinds) if kind == "mark"]
+    low, high = bounding_box(word.points)
+    scale, centre = r.placement["scale"], np.asarray(r.placement["centre_cm"])
+    expected = (dot - (low + high) / 2) * scale + centre
+    assert_allclose(dot_ink.mean(axis=0), expected.mean(axis=0), atol=0.02)
+    assert dot_ink[:, 1].min() > word_ink[:, 1].max() - 0.5 * (high - low)[1]  # above the stem
+    # between the two strokes the pen is in the air
+    first_end = np.flatnonzero(r.step_stroke == 0)[-1]
+    second_start = np.flatnonzero(r.step_stroke == 1)[0]
+    assert r.tip_paper[first_end + 1 : second_start, 2].max() > 1.0
 
 
 def test_two_words_are_two_strokes_with_the_pen_lifted_in_between():

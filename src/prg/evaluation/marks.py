@@ -163,16 +163,15 @@ def marks_figure(check: MarksCheck, path: Path, extra_words: int = 6) -> Path:
     plt = pyplot()
     letters = [check.written[c] for c in ALPHABET if c in check.written]
     words = [w for t, w in check.written.items() if t not in ALPHABET][:extra_words]
-    cols = 16
+    cols, pairs = 16, -(-len(words) // 2)
     rows = -(-len(letters) // cols)
-    fig = plt.figure(figsize=(cols * 0.9, rows * 1.3 + len(words) * 0.9), dpi=120)
-    grid = fig.add_gridspec(
-        rows + len(words), cols, height_ratios=[1.3] * rows + [0.9] * len(words)
-    )
+    fig = plt.figure(figsize=(cols * 0.9, rows * 1.3 + pairs * 1.8), dpi=120)
+    grid = fig.add_gridspec(rows + pairs, cols, height_ratios=[1.3] * rows + [1.8] * pairs)
     for i, word in enumerate(letters):
         _draw(fig.add_subplot(grid[i // cols, i % cols]), word)
-    for j, word in enumerate(words):
-        _draw(fig.add_subplot(grid[rows + j, :]), word)
+    half = cols // 2
+    for j, word in enumerate(words):  # two words a row
+        _draw(fig.add_subplot(grid[rows + j // 2, (j % 2) * half : (j % 2 + 1) * half]), word)
     fig.suptitle("delayed strokes (purple) after the cursive body: every class, then random words")
     path.parent.mkdir(parents=True, exist_ok=True)
     try:

@@ -2,7 +2,9 @@
 
 :func:`font_word` gives the simulator (its tests, its benchmark, a first try on a machine without
 ``models/``) a realistic word trajectory: each letter is a glyph of a single-line Hershey font
-joined into one stroke and normalised the way the training data are
+joined into one stroke (for a letter that gets a delayed stroke, :mod:`prg.pipeline.marks`, only
+the glyph's longest stroke: the dot or bar is the delayed stroke's) and normalised the way the
+training data are
 (:func:`prg.data.synthetic.join_strokes`, :func:`prg.data.preprocess.preprocess_stroke`), then
 laid out, connected (Algorithm 1) and fitted with one DMP by
 :func:`prg.pipeline.compose.compose_word` — the same final processing map ``prg-write`` uses
@@ -55,9 +57,16 @@ def font_word(
         typeface.load_default_font(font)
     except Exception:
         raise UsageError(f"font {font!r}: not a Hershey font name (e.g. futural)") from None
+    from prg.pipeline.compose import GenerateSettings
+
+    params = params or GenerateSettings()
     letters = []
     for char in text.replace(" ", ""):
         strokes = [np.asarray(s, dtype=np.float64) for s in typeface.strokes_for_text(char)]
-        letters.append(preprocess_stroke(join_strokes([s for s in strokes if len(s)])))
+        strokes = [s for s in strokes if len(s) > 1]
+        if params.delayed_strokes and params.marks.mark_of(char):
+            # the glyph's own dot or bar gives way to the delayed stroke: keep its main stroke
+            strokes = [max(strokes, key=lambda s: np.linalg.norm(np.diff(s, axis=0), axis=1).sum())]
+        letters.append(preprocess_stroke(join_strokes(strokes)))
     word, _ = compose_word(np.stack(letters), text, params)
     return word
