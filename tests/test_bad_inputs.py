@@ -389,6 +389,15 @@ CASES = [
         2,
         "robot.urdf=${oc.env:PRG_NO_SUCH_VAR} cannot be resolved",
     ),
+    case(
+        "write-delayed-strokes-not-bool",
+        "prg-write",
+        "text=hi delayed_strokes=maybe",
+        2,
+        "delayed_strokes must be true or false",
+    ),
+    case("write-mark-twice", "prg-write", "text=hi marks.dotted=it", 2, "'t' is also dotted"),
+    case("write-zero-dot", "prg-write", "text=hi marks.dot_radius=0", 2, "marks.dot_radius"),
     # ---- prg-export
     case("export-no-word", "prg-export", [], 2, "give word=WORD.json"),
     case("export-unknown-format", "prg-export", "word={word} formats=[dxf]", 2, "dxf"),
