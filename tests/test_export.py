@@ -18,7 +18,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from prg.commands.cli import compose_config
-from prg.errors import UsageError
+from prg.errors import SettingsError, UsageError
 from prg.export import (
     ExportSettings,
     GcodeSettings,
@@ -210,6 +210,22 @@ def test_gcode_follows_the_timed_word_within_a_hundredth_of_a_millimetre_and_its
     assert program.pen_down_s == pytest.approx(seconds, rel=1e-6)
     header = program.text.splitlines()[:5]
     assert {"G21", "G90"} <= {line.split()[0] for line in header}
+
+
+def test_gcode_in_inches_is_the_same_path_and_time(word):
+    runs, pen_down_s = _timed(word)
+    placement = place_word(word, PlotterSettings())
+    settings = GcodeSettings(units="inch", decimals=5, z_up_mm=5.08)
+    program = gcode_text(timed_strokes(word, placement, DT), PlotterSettings(), settings)
+    strokes, seconds = parse_gcode(program.text)
+    assert len(strokes) == len(runs)
+    for parsed, expected in zip(strokes, runs):
+        assert _nearest(parsed * 25.4, expected).max() < 0.01  # inches back to mm
+    assert seconds == pytest.approx(pen_down_s, rel=1e-3)
+    lines = program.text.splitlines()
+    assert lines[1].startswith("G20") and "G0 Z0.20000" in lines
+    with pytest.raises(SettingsError, match="units"):
+        GcodeSettings(units="cm")
 
 
 def test_gcode_at_half_the_tempo_takes_twice_as_long(word):

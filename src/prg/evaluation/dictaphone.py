@@ -26,7 +26,7 @@ from prg.files import atomic_path
 from prg.pipeline.speech import SAMPLE_RATE
 from prg.pipeline.timing import rest_to_rest_samples
 from prg.pipeline.word import WordTrajectory
-from prg.plotting import pyplot
+from prg.plotting import MARK, hex_colour, pyplot
 from prg.writer import Writer, WriteResult
 
 log = logging.getLogger(__name__)
@@ -200,7 +200,7 @@ def table2_figure(words: list[str], channels: list[str], items: dict, path: Path
         top.set_yticks([])
         written: WordTrajectory = items[word, channel, "word"]
         for kind, segment in written.polylines(highlight=False):
-            colour = "black" if kind == "letter" else "tab:orange"
+            colour = {"letter": "black", "mark": hex_colour(MARK)}.get(kind, "tab:orange")
             bottom.plot(segment[:, 0], segment[:, 1], color=colour, linewidth=1.2)
         bottom.set_aspect("equal")
         bottom.axis("off")

@@ -55,6 +55,7 @@ __all__ = [
 _Float = NDArray[np.float64]
 
 PEN_MODES = ("z", "servo")
+UNITS = {"mm": ("G21", "millimetres", 1.0), "inch": ("G20", "inches", 1 / 25.4)}
 # a servo command is one G-code word with its parameters, e.g. "M3 S1000", "M5", "M280 P0 S90"
 _COMMAND = re.compile(r"^[GM]\d+(?: [A-Z][-+]?\d+(?:\.\d+)?)*$")
 
@@ -120,7 +121,11 @@ class GcodeSettings(FromMapping):
         The machine's fastest feed (GRBL ``$110``/``$111``); a word that needs more is refused
         (GRBL would clamp it and write slower than planned). None: not checked.
     decimals : int
-        Decimals of the coordinates (3: micrometres).
+        Decimals of the coordinates in ``units`` (3: micrometres in mm; give 4 or more for
+        inches).
+    units : str
+        ``mm`` (``G21``) or ``inch`` (``G20``): the unit of the program's coordinates and feeds;
+        the settings above stay in millimetres.
     """
 
     origin_mm: tuple[float, float] = (0.0, 0.0)
@@ -133,6 +138,7 @@ class GcodeSettings(FromMapping):
     servo_wait_s: float = 0.2
     max_feed_mm_min: float | None = None
     decimals: int = 3
+    units: str = "mm"
 
     def __post_init__(self) -> None:
         origin = vector(self.origin_mm, "origin_mm", 2, "must be two numbers (mm)")
@@ -140,6 +146,7 @@ class GcodeSettings(FromMapping):
         _range_list(self, "origin_mm", GCODE_RANGES["origin_mm"])
         check_ranges(self, {k: v for k, v in GCODE_RANGES.items() if k != "origin_mm"})
         check(self.pen in PEN_MODES, "pen", f"must be {' or '.join(PEN_MODES)}, got {self.pen!r}")
+        check(self.units in UNITS, "units", f"must be {' or '.join(UNITS)}, got {self.units!r}")
         check(
             self.z_up_mm > self.z_down_mm,
             "z_up_mm",
@@ -337,7 +344,7 @@ def gcode_text(
     """The GRBL program writing ``strokes`` (sheet mm) at their timing.
 
     Every step between consecutive samples of a stroke is one ``G1 X Y F`` with
-    ``F = 60 * distance / dt`` (mm/min), the distance measured between the coordinates as
+    ``F = 60 * distance / dt`` (``units`` per minute), the distance measured between the coordinates as
     written (rounded to ``settings.decimals``), so a plotter that keeps its feed rates spends
     exactly the samples' time. Steps that round to no motion (the pen at rest, at a stroke's
     start and end) become ``G4 P<s>`` dwells with the pen down, so no time is lost either.
@@ -355,24 +362,25 @@ def gcode_text(
     check_fits([s.points_mm for s in strokes], _sheet(plotter), _sheet_name(plotter), title)
     s = settings
     nd = s.decimals
+    code, unit_name, per_mm = UNITS[s.units]
     origin = np.asarray(s.origin_mm, dtype=np.float64)
     if s.pen == "z":
-        pen_up = [f"G0 Z{_fmt(s.z_up_mm, nd)}"]
-        pen_down = [f"G1 Z{_fmt(s.z_down_mm, nd)} F{s.z_feed_mm_min:.1f}"]
+        pen_up = [f"G0 Z{_fmt(s.z_up_mm * per_mm, nd)}"]
+        pen_down = [f"G1 Z{_fmt(s.z_down_mm * per_mm, nd)} F{s.z_feed_mm_min * per_mm:.4f}"]
     else:
         wait = [f"G4 P{s.servo_wait_s:.3f}"] if s.servo_wait_s > 0 else []
         pen_up, pen_down = [s.servo_up, *wait], [s.servo_down, *wait]
     safe_title = re.sub(r"[^A-Za-z0-9 ._-]", "?", title)[:60]
     lines = [
         f"; prg-export: {safe_title}" if safe_title else "; prg-export",
-        "G21 ; millimetres",
+        f"{code} ; {unit_name}",
         "G90 ; absolute coordinates",
         "G94 ; feed per minute",
         *pen_up,
     ]
     pen_down_s, moves, fastest = 0.0, 0, 0.0
     for stroke in strokes:
-        pts = np.round((stroke.points_mm + origin) * 10**nd) / 10**nd
+        pts = np.round((stroke.points_mm + origin) * per_mm * 10**nd) / 10**nd
         x, y = (_fmt(v, nd) for v in pts[0])
         lines += [f"G0 X{x} Y{y}", *pen_down]
         rest = 0.0
@@ -386,9 +394,9 @@ def gcode_text(
                 lines.append(f"G4 P{rest:.4f}")
                 pen_down_s += float(f"{rest:.4f}")
                 rest = 0.0
-            feed = 60.0 * distance / dt
+            feed = 60.0 * distance / dt  # units per minute
             written = f"{feed:.4f}"
-            fastest = max(fastest, feed)
+            fastest = max(fastest, feed / per_mm)
             x, y = (_fmt(v, nd) for v in pts[i])
             lines.append(f"G1 X{x} Y{y} F{written}")
             pen_down_s += 60.0 * distance / float(written)
