@@ -48,6 +48,7 @@ from studies.stimuli import (
     save_png,
     stand_ins,
     stimulus_name,
+    unmarked_words,
 )
 
 try:
@@ -292,16 +293,28 @@ def _build_into(
 ) -> BuildReport:
     # human samples first: a bad folder or file fails before the model runs
     dirs = [*(config.human.get("dirs") or []), *human_dirs]
-    humans = load_human_samples(dirs, config.words, bool(config.human["accept_lifted"]))
+    delayed = config.delayed_strokes
+    humans = load_human_samples(
+        dirs, config.words, bool(config.human["accept_lifted"]), delayed_strokes=delayed
+    )
 
     # robot samples
     sources = root / "sources" / "robot"
     robot_dir = robot_dir if robot_dir is not None else config.robot.get("dir")
+    robot_notes = []
     if robot_dir is not None:
-        robot = load_robot_words(robot_dir, config.words)
+        robot = load_robot_words(robot_dir, config.words, delayed_strokes=delayed)
         sources.mkdir(parents=True)
         for word, sample in robot.items():
             shutil.copyfile(sample.origin, sources / f"{word}.json")
+        unmarked = unmarked_words(robot) if delayed else []
+        if unmarked:
+            robot_notes.append(
+                f"robot words without delayed strokes (dots, bars) although delayed_strokes "
+                f"is true: {', '.join(unmarked)}; the human writers are asked to add theirs "
+                f"(rewrite them with prg-write delayed_strokes=true, or set "
+                "delayed_strokes: false)"
+            )
     else:
         generate_robot_words(
             config.words,
@@ -310,8 +323,9 @@ def _build_into(
             ckpt=ckpt if ckpt is not None else config.robot.get("ckpt"),
             overrides=config.robot["write_overrides"],
             progress=say,
+            delayed_strokes=delayed,
         )
-        robot = load_robot_words(sources, config.words)
+        robot = load_robot_words(sources, config.words, delayed_strokes=delayed)
 
     # what the design may show
     writers, missing = choose_writers(config, humans)
@@ -324,8 +338,8 @@ def _build_into(
     pilot = pilot and bool(missing)
     if pilot:  # stand-ins for the missing writers
         for word in config.words:
-            short = config.human_writers - len(writers[word])
-            for sample in stand_ins(robot[word], short, config.seed) if short > 0 else []:
+            short = max(0, config.human_writers - len(writers[word]))
+            for sample in stand_ins(robot[word], short, config.seed, delayed_strokes=delayed):
                 humans.by_word[word][sample.writer_id] = sample
                 writers[word].append(sample.writer_id)
     ready = pilot or not missing
@@ -381,6 +395,8 @@ def _build_into(
         "study": config.name,
         "words": list(config.words),
         "on_lift": config.capture["on_lift"],
+        "delayed_strokes": delayed,
+        "delayed_max_size": float(config.capture["delayed_max_size"]),
         "post_url": config.capture["post_url"],
         "canvas_width": int(config.capture["canvas_width"]),
         "canvas_height": int(config.capture["canvas_height"]),
@@ -389,7 +405,7 @@ def _build_into(
     (capture / "config.js").write_text(
         js_assignment("PRG_CAPTURE_CONFIG", capture_cfg), encoding="utf-8"
     )
-    notes = [*balance_notes(config), *humans.notes]
+    notes = [*balance_notes(config), *robot_notes, *humans.notes]
     report = BuildReport(root, ready, pilot, missing, notes, len(samples), app_version)
     _write_json(
         root / "manifest.json",
@@ -399,6 +415,7 @@ def _build_into(
             "source": config.source,
             "app_version": app_version,
             "seed": config.seed,
+            "delayed_strokes": delayed,
             "ready": ready,
             "pilot": pilot,
             "missing": missing,
@@ -430,6 +447,7 @@ def _page_config(
         "columns": list(response_columns(config.kind)),
         "n_options": config.n_options if config.kind == "turing" else 1,
         "seed": config.seed,
+        "delayed_strokes": config.delayed_strokes,
         "app_version": app_version,
         "ready": ready,
         "pilot": pilot,
@@ -458,6 +476,17 @@ def _readme(config: StudySettings, page: dict) -> str:
     else:
         status = "NOT READY:\n\n" + "\n".join(f"- {m}" for m in page["missing"])
     post = page["save"]["post_url"]
+    if config.delayed_strokes:
+        handwriting = (
+            "delayed strokes (`delayed_strokes: true`): the robot dots its i's and j's and "
+            "crosses its t's and f's after the word, and the capture page asks the writers to "
+            "do the same."
+        )
+    else:
+        handwriting = (
+            "one stroke a word (`delayed_strokes: false`, as the paper): no dots or bars, "
+            "for the robot and the writers."
+        )
     saving = f"and POSTed (as text/plain) to {post}" if post else "(save.post_url also POSTs it)"
     return f"""# Study `{config.name}` ({config.kind}) — {status}
 
@@ -475,4 +504,5 @@ Open `index.html` (file:// works) or serve this folder from any static host
 - Ground truth: `trials.csv`, `stimuli.csv`. The capture page for human writers:
   `capture/index.html` (`?writer=ID`); its JSON files are human samples for
   `prg-study build --human DIR`.
+- Handwriting: {handwriting}
 """

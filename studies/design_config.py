@@ -12,6 +12,7 @@ The designs built from a :class:`StudySettings` are in :mod:`studies.design`.
 from __future__ import annotations
 
 import hashlib
+import math
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
@@ -22,7 +23,7 @@ from urllib.parse import urlsplit
 import yaml
 
 from prg.errors import UsageError
-from studies.stimuli import RenderStyle
+from studies.stimuli import DELAYED_MAX_SIZE, RenderStyle, sets_delayed_strokes
 
 KINDS = ("turing", "readability")
 WORD_RE = re.compile(r"^[A-Za-z]+$")
@@ -105,6 +106,11 @@ class StudySettings:
     lists : tuple of str
         Study 2: the two list names (A, B).
     seed : int
+    delayed_strokes : bool
+        True (default): the robot writes its words with delayed strokes (``prg-write``
+        ``delayed_strokes=true``: the i's and j's dotted, the t's and f's crossed after the
+        cursive word) and the capture page lets the human writers add their dots and bars after
+        the word in the same way; False: the paper's single stroke for both.
     equivalence_margin : float
         Fixed before data collection: study 1 the margin around chance, study 2 the margin on
         the human - robot difference in reading success.
@@ -126,7 +132,9 @@ class StudySettings:
         ``download`` (offer the CSV at the end) and ``post_url`` (POST it there; null: don't).
     capture : dict
         The capture page: ``on_lift`` (restart | flag), ``post_url``, ``canvas_width``,
-        ``canvas_height`` (CSS pixels).
+        ``canvas_height`` (CSS pixels), ``delayed_max_size`` (with ``delayed_strokes``: a
+        stroke after the word is a dot or bar when its bounding box is no taller than this
+        fraction of the word's height and no wider than twice it; a larger one is a pen lift).
     source : str
         The YAML file it was read from (or ``"<dict>"``).
     """
@@ -139,6 +147,7 @@ class StudySettings:
     participants: int = 50
     lists: tuple[str, ...] = ("A", "B")
     seed: int = 0
+    delayed_strokes: bool = True
     equivalence_margin: float = 0.05
     alpha: float = 0.05
     attention_checks: tuple[AttentionCheck, ...] = ()
@@ -173,7 +182,13 @@ _SECTIONS = {
     "page": {},
     "completion": {"code": None, "url": PROLIFIC_URL, "redirect_delay_ms": 3000},
     "save": {"download": True, "post_url": None},
-    "capture": {"on_lift": "restart", "post_url": None, "canvas_width": 900, "canvas_height": 300},
+    "capture": {
+        "on_lift": "restart",
+        "post_url": None,
+        "canvas_width": 900,
+        "canvas_height": 300,
+        "delayed_max_size": DELAYED_MAX_SIZE,
+    },
 }
 #: Sections without defaults: the keys they accept (render: studies.stimuli.RenderStyle's).
 _FREE_SECTIONS = {"page": ("title", "consent", "instructions", "confidence_labels")}
@@ -196,6 +211,7 @@ _TOP = {
     "participants",
     "lists",
     "seed",
+    "delayed_strokes",
     "equivalence_margin",
     "alpha",
     "attention_checks",
@@ -271,6 +287,12 @@ def _check_sections(sections: dict) -> None:
         raise UsageError(
             "robot.write_overrides must be a list of prg-write overrides (key=value texts)"
         )
+    clash = next((o for o in overrides if sets_delayed_strokes(o)), None)
+    if clash is not None:
+        raise UsageError(
+            f"robot.write_overrides: {clash!r}: set the study's top-level delayed_strokes "
+            "instead (it decides for the robot and the human writers alike)"
+        )
     for section, key in (("human", "accept_lifted"), ("save", "download")):
         if not isinstance(sections[section][key], bool):
             raise UsageError(
@@ -296,6 +318,16 @@ def _check_sections(sections: dict) -> None:
             raise UsageError(
                 f"capture.{key} must be an integer from {low} to {high} (CSS pixels), got {value!r}"
             )
+    size = sections["capture"]["delayed_max_size"]
+    if (
+        isinstance(size, bool)
+        or not isinstance(size, int | float)
+        or not (math.isfinite(size) and 0 < size <= 1)
+    ):
+        raise UsageError(
+            "capture.delayed_max_size must be a number in (0, 1] (a fraction of the word's "
+            f"height), got {size!r}"
+        )
     page = sections["page"]
     for key in ("title", "consent", "instructions"):
         if page.get(key) is not None and not isinstance(page[key], str):
@@ -376,6 +408,12 @@ def study_from_dict(doc: Mapping[str, Any], source: str = "<dict>") -> StudySett
         or lists[0] == lists[1]
     ):
         raise UsageError(f"lists must be two different names, e.g. [A, B], got {lists!r}")
+    delayed = doc.get("delayed_strokes", True)
+    if not isinstance(delayed, bool):
+        raise UsageError(
+            "delayed_strokes must be true (the robot dots its i's and crosses its t's and the "
+            f"writers add their dots and bars after the word) or false (one stroke), got {delayed!r}"
+        )
     if kind == "readability" and len(words) % 2:
         raise UsageError(
             f"a readability study needs an even number of words (half human, half robot per "
@@ -414,6 +452,7 @@ def study_from_dict(doc: Mapping[str, Any], source: str = "<dict>") -> StudySett
         participants=_int(doc, "participants", 50, 1, MAX_PARTICIPANTS),
         lists=tuple(lists),
         seed=_int(doc, "seed", 0, 0, MAX_SEED),
+        delayed_strokes=delayed,
         equivalence_margin=_float(doc, "equivalence_margin", 0.05, 0.0, 1.0),
         alpha=_float(doc, "alpha", 0.05, 0.0, 0.5),
         robot=sections["robot"],

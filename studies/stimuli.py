@@ -11,14 +11,23 @@ Human sample files (:func:`load_human_samples`, any mix, searched recursively):
 
 * **capture JSON** written by the capture page (schema ``prg.handwriting_capture``, version 1): a
   writer's session, one entry per word; strokes of ``[x, y, t_ms, pressure]`` in CSS pixels,
-  y down (see ``studies/web/capture.js``);
+  y down (see ``studies/web/capture.js``); ``delayed`` (optional: files from before it have
+  none) lists the strokes the page kept as delayed strokes;
 * **strokes JSON**: ``{"word": ..., "writer_id": ..., "strokes": [[[x, y], ...], ...],
-  "y_down": true}`` (``word``/``writer_id`` may come from the path, below; extra numbers per
-  point are ignored), or a ``prg.word_trajectory`` file;
+  "y_down": true, "delayed": [1]}`` (``word``/``writer_id`` may come from the path, below;
+  extra numbers per point are ignored; ``delayed`` is optional), or a ``prg.word_trajectory``
+  file;
 * **SVG**: the ``polyline``, ``line`` and ``path`` elements (``M L H V C S Q T Z``; arcs are
   drawn as straight lines), with their ``transform`` attributes.
 
 A file without ``word``/``writer_id`` inside is named ``<writer_id>/<word>.json|svg``.
+
+**Delayed strokes.** The word is one movement; the dots of the i's and j's and the bars of the
+t's and f's may follow it as separate, small strokes (a :class:`Sample`'s ``delayed``). A sample
+whose strokes after the first are all delayed strokes was not written with a pen lift; any
+other extra stroke is a lift. The robot's marks (``"mark"`` segments of its word trajectory)
+are its delayed strokes. A study's ``delayed_strokes`` setting decides for both: with False,
+the delayed strokes of every sample are left undrawn (the paper's single stroke).
 
 Robot samples: :func:`generate_robot_words` writes each word with ``prg-write``'s task function;
 :func:`load_robot_words` reads ``<word>.json`` or ``<word>/word.json`` word trajectories.
@@ -32,7 +41,7 @@ import math
 import re
 import xml.etree.ElementTree as ET
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -45,6 +54,10 @@ CAPTURE_SCHEMA = "prg.handwriting_capture"
 CAPTURE_VERSION = 1
 WORD_SCHEMA = "prg.word_trajectory"
 HUMAN_SUFFIXES = (".json", ".svg")
+#: The capture page's rule (``capture.delayed_max_size``): a stroke after the word is a delayed
+#: stroke (a dot or a bar) when its bounding box is no taller than this fraction of the word
+#: stroke's height and no wider than twice it; a larger one is a pen lift.
+DELAYED_MAX_SIZE = 0.35
 
 
 @dataclass(frozen=True)
@@ -61,7 +74,11 @@ class Sample:
     origin : str
         The file it came from.
     lifted : bool
-        The writer lifted the pen (a capture flagged so, or several strokes).
+        The writer lifted the pen (a capture flagged so, or strokes after the first that are
+        not delayed strokes).
+    delayed : tuple of int
+        Indices into ``strokes`` of the delayed strokes: the dots and bars written after the
+        word (the robot's marks; the strokes a capture kept as such). Never 0.
     """
 
     word: str
@@ -69,11 +86,19 @@ class Sample:
     strokes: tuple[np.ndarray, ...]
     origin: str = ""
     lifted: bool = False
+    delayed: tuple[int, ...] = ()
 
     @property
     def source(self) -> str:
         """``"robot"`` or ``"human"``."""
         return ROBOT if self.writer_id == ROBOT else "human"
+
+    def without_delayed(self) -> Sample:
+        """The sample without its delayed strokes (the paper's single stroke)."""
+        if not self.delayed:
+            return self
+        keep = tuple(s for i, s in enumerate(self.strokes) if i not in self.delayed)
+        return replace(self, strokes=keep, delayed=())
 
 
 MAX_RENDER_PX = 4000  #: a stimulus PNG's width or height
@@ -244,17 +269,42 @@ def _points(raw, where: str) -> np.ndarray:
     return pts
 
 
-def _strokes(raw, where: str, y_down: bool) -> tuple[np.ndarray, ...]:
+def _strokes(
+    raw, where: str, y_down: bool, delayed=None
+) -> tuple[tuple[np.ndarray, ...], tuple[int, ...]]:
+    """The non-empty strokes of ``raw`` (y up) and the indices among them of the delayed
+    strokes that ``delayed`` lists (indices into ``raw``; None: none)."""
     if not isinstance(raw, list):
         raise UsageError(f"{where}: strokes must be a list of strokes, each a list of [x, y]")
-    out = []
-    for stroke in raw:
+    if delayed is None:
+        delayed = []
+    if (
+        not isinstance(delayed, list)
+        or not all(isinstance(k, int) and not isinstance(k, bool) for k in delayed)
+        or not all(1 <= k < len(raw) for k in delayed)
+        or len(set(delayed)) != len(delayed)
+    ):
+        accepted = f"1 to {len(raw) - 1}" if len(raw) > 1 else "none: there is one stroke"
+        raise UsageError(
+            f"{where}: delayed must list strokes after the first by index ({accepted}), "
+            f"each once, got {delayed!r}"
+        )
+    out, kept = [], []
+    for i, stroke in enumerate(raw):
         if not isinstance(stroke, list):
             raise UsageError(f"{where}: each stroke must be a list of [x, y] points")
         pts = _points(stroke, where)
         if len(pts):
+            if i in delayed and out:  # a delayed stroke after an empty first one is the word
+                kept.append(len(out))
             out.append(pts * [1.0, -1.0] if y_down else pts)
-    return tuple(out)
+    return tuple(out), tuple(kept)
+
+
+def is_lifted(n_strokes: int, delayed: Sequence[int], flagged: bool = False) -> bool:
+    """Whether a sample was written with a pen lift: flagged so, or a stroke after the first
+    that is not a delayed stroke."""
+    return bool(flagged) or n_strokes - 1 > len(delayed)
 
 
 def _identity_from_path(path: Path, root: Path) -> tuple[str | None, str | None]:
@@ -283,11 +333,11 @@ def read_capture(doc: dict, where: str) -> list[Sample]:
         here = f"{where}: samples[{i}]"
         if not isinstance(entry, dict) or not isinstance(entry.get("word"), str):
             raise UsageError(f"{here} must be an object with word and strokes")
-        strokes = _strokes(entry.get("strokes"), here, y_down)
+        strokes, delayed = _strokes(entry.get("strokes"), here, y_down, entry.get("delayed"))
         if not strokes:
             continue  # a skipped word
-        lifted = bool(entry.get("lifted", False)) or len(strokes) > 1
-        out.append(Sample(entry["word"], writer.strip(), strokes, where, lifted))
+        lifted = is_lifted(len(strokes), delayed, entry.get("lifted", False))
+        out.append(Sample(entry["word"], writer.strip(), strokes, where, lifted, delayed))
     return out
 
 
@@ -307,17 +357,19 @@ def read_json_sample(path: Path, root: Path) -> list[Sample]:
         from prg.pipeline.word import WordTrajectory
 
         traj = WordTrajectory.from_json(path)
-        return [Sample(traj.text, _need(writer, where), word_strokes(traj), where)]
-    y_down = False
+        return [trajectory_sample(traj, _need(writer, where), where)]
+    y_down, delayed = False, None
     if isinstance(doc, dict):
         word = doc.get("word", word)
         writer = doc.get("writer_id", writer)
         y_down = bool(doc.get("y_down", False))
+        delayed = doc.get("delayed")
         doc = doc.get("strokes")
-    strokes = _strokes(doc, where, y_down)
+    strokes, delayed = _strokes(doc, where, y_down, delayed)
     if not strokes:
         raise UsageError(f"{where}: no strokes")
-    return [Sample(str(word), _need(writer, where), strokes, where, len(strokes) > 1)]
+    lifted = is_lifted(len(strokes), delayed)
+    return [Sample(str(word), _need(writer, where), strokes, where, lifted, delayed)]
 
 
 def _need(writer: str | None, where: str) -> str:
@@ -328,17 +380,32 @@ def _need(writer: str | None, where: str) -> str:
     return str(writer)
 
 
-def word_strokes(traj) -> tuple[np.ndarray, ...]:
-    """The ink of a :class:`prg.pipeline.word.WordTrajectory`: its pen-down runs (y up)."""
+def _pen_down_runs(traj) -> list[tuple[int, int]]:
+    """``(start, stop)`` point indices of each pen-down run of a word trajectory."""
     down = traj.pen_down()
     out, start = [], None
     for i, d in enumerate([*down.tolist(), False]):
         if d and start is None:
             start = i
         elif not d and start is not None:
-            out.append(traj.points[start:i].copy())
+            out.append((start, i))
             start = None
-    return tuple(out)
+    return out
+
+
+def word_strokes(traj) -> tuple[np.ndarray, ...]:
+    """The ink of a :class:`prg.pipeline.word.WordTrajectory`: its pen-down runs (y up), the
+    delayed strokes (its ``"mark"`` segments) included."""
+    return tuple(traj.points[a:b].copy() for a, b in _pen_down_runs(traj))
+
+
+def trajectory_sample(traj, writer_id: str, origin: str) -> Sample:
+    """A word trajectory as a :class:`Sample`: its pen-down runs, the runs after the body
+    (:attr:`~prg.pipeline.word.WordTrajectory.body_end`: the marks) as its delayed strokes."""
+    runs = _pen_down_runs(traj)
+    strokes = tuple(traj.points[a:b].copy() for a, b in runs)
+    delayed = tuple(i for i, (a, _) in enumerate(runs) if i and a >= traj.body_end)
+    return Sample(traj.text, writer_id, strokes, origin, False, delayed)
 
 
 # -- SVG
@@ -524,12 +591,17 @@ class HumanSamples:
 
 
 def load_human_samples(
-    dirs: Iterable[str | Path], words: Sequence[str], accept_lifted: bool = False
+    dirs: Iterable[str | Path],
+    words: Sequence[str],
+    accept_lifted: bool = False,
+    delayed_strokes: bool = True,
 ) -> HumanSamples:
     """Read every human sample file under ``dirs`` (recursively) for the study's ``words``.
 
     Samples of other words, samples with a pen lift (unless ``accept_lifted``) and a second
-    sample of the same word by the same writer are left out and listed in ``notes``.
+    sample of the same word by the same writer are left out and listed in ``notes``. Delayed
+    strokes (dots and bars written after the word) are no pen lift: the sample keeps them, or,
+    with ``delayed_strokes`` False (the paper's single stroke), drops them with a note.
 
     Raises
     ------
@@ -560,33 +632,71 @@ def load_human_samples(
                         f"{path}: a second {sample.word!r} by {sample.writer_id}; left out"
                     )
                 else:
+                    if sample.delayed and not delayed_strokes:
+                        out.notes.append(
+                            f"{path}: {sample.writer_id}/{sample.word}: its "
+                            f"{len(sample.delayed)} delayed stroke(s) (dots, bars) are not drawn "
+                            "(delayed_strokes: false)"
+                        )
+                        sample = sample.without_delayed()
                     out.by_word[sample.word][sample.writer_id] = sample
     return out
 
 
-def stand_ins(robot: Sample, n: int, seed: int, amount: float = 0.08) -> list[Sample]:
+def stand_ins(
+    robot: Sample, n: int, seed: int, amount: float = 0.08, delayed_strokes: bool = True
+) -> list[Sample]:
     """``n`` placeholder "human" samples of the robot's word, for piloting a study before the
     human writers have written: the robot's strokes under a random shear/scale and a slow
     wobble, writers ``pilot01``, ``pilot02`` ... (``lifted`` False; never for real data).
+
+    The robot's delayed strokes (its dots and bars, ``robot.delayed``) are kept as the stand-ins'
+    delayed strokes, each moved with the part of the word nearest to it and keeping its own
+    shape (a dot stays a dot); with ``delayed_strokes`` False they are left out.
     """
+    if not delayed_strokes:
+        robot = robot.without_delayed()
     pts = np.concatenate(robot.strokes)
     height = float(np.ptp(pts[:, 1])) or 1.0
+    writing = [i for i in range(len(robot.strokes)) if i not in robot.delayed]
+    anchors = np.concatenate([robot.strokes[i] for i in writing])
     out = []
     for k in range(n):
         rng = np.random.default_rng([seed, 5, k])
         a = np.eye(2) + rng.normal(0, amount, (2, 2))
-        strokes = []
-        for stroke in robot.strokes:
+        strokes: list[np.ndarray] = list(robot.strokes)
+        shifts = []
+        for i in writing:
+            stroke = robot.strokes[i]
             u = np.linspace(0, 1, len(stroke))[:, None]
             wobble = np.sin(2 * np.pi * u * rng.uniform(1, 3, 2) + rng.uniform(0, 6, 2))
-            strokes.append(stroke @ a.T + wobble * amount * height * 0.5)
-        out.append(Sample(robot.word, f"pilot{k + 1:02d}", tuple(strokes), "pilot stand-in"))
+            strokes[i] = stroke @ a.T + wobble * amount * height * 0.5
+            shifts.append(wobble * amount * height * 0.5)
+        shift = np.concatenate(shifts)
+        for i in robot.delayed:
+            centre = robot.strokes[i].mean(axis=0)
+            near = int(np.argmin(np.hypot(*(anchors - centre).T)))
+            strokes[i] = robot.strokes[i] @ a.T + shift[near]
+        out.append(
+            Sample(
+                robot.word,
+                f"pilot{k + 1:02d}",
+                tuple(strokes),
+                "pilot stand-in",
+                delayed=robot.delayed,
+            )
+        )
     return out
 
 
 # ---------------------------------------------------------------------------- robot samples
-def load_robot_words(folder: str | Path, words: Sequence[str]) -> dict[str, Sample]:
+def load_robot_words(
+    folder: str | Path, words: Sequence[str], delayed_strokes: bool = True
+) -> dict[str, Sample]:
     """Robot samples from ``<folder>/<word>.json`` or ``<folder>/<word>/word.json``.
+
+    With ``delayed_strokes`` False a word's marks (its dots and bars) are left out: the body
+    alone, the paper's single stroke, whatever the file holds.
 
     Raises
     ------
@@ -610,8 +720,27 @@ def load_robot_words(folder: str | Path, words: Sequence[str]) -> dict[str, Samp
         traj = WordTrajectory.from_json(path)
         if traj.text != word:
             raise UsageError(f"{path}: holds {traj.text!r}, expected {word!r}")
-        out[word] = Sample(word, ROBOT, word_strokes(traj), str(path))
+        sample = trajectory_sample(traj, ROBOT, str(path))
+        out[word] = sample if delayed_strokes else sample.without_delayed()
     return out
+
+
+def sets_delayed_strokes(override: str) -> bool:
+    """Whether a ``prg-write`` override sets ``delayed_strokes`` (``delayed_strokes=...``,
+    ``+``/``++``/``~`` forms too)."""
+    key = override.partition("=")[0].strip().lstrip("+~").strip()
+    return key == "delayed_strokes"
+
+
+def unmarked_words(robot: dict[str, Sample]) -> list[str]:
+    """Robot words with a letter that ``prg-write`` marks by default (dotted i/j, crossed t/f:
+    :class:`prg.pipeline.marks.MarkSettings`) but no delayed stroke: words written with
+    ``delayed_strokes=false`` (or by a version without marks)."""
+    from prg.pipeline.marks import MarkSettings
+
+    marks = MarkSettings()
+    letters = set(marks.dotted + marks.crossed)
+    return [w for w, s in robot.items() if not s.delayed and letters & set(w)]
 
 
 def generate_robot_words(
@@ -621,6 +750,7 @@ def generate_robot_words(
     ckpt: str | Path | None = None,
     overrides: Sequence[str] = (),
     progress: Callable[[str], None] | None = None,
+    delayed_strokes: bool = True,
 ) -> dict[str, Path]:
     """Write each word with one :class:`prg.writer.Writer` (the model loaded once).
 
@@ -633,19 +763,36 @@ def generate_robot_words(
         Model family; its checkpoint is ``models/<family>/model.ckpt`` unless ``ckpt`` is given.
     ckpt : path, optional
     overrides : sequence of str
-        ``prg-write`` settings as its overrides (e.g. ``generate.temperature=0.3``).
+        ``prg-write`` settings as its overrides (e.g. ``generate.temperature=0.3``); not
+        ``delayed_strokes``, which is the argument below.
     progress : callable, optional
         Called with a line per word.
+    delayed_strokes : bool
+        Passed as ``prg-write``'s ``delayed_strokes``: True dots the i's and j's and crosses
+        the t's and f's after the cursive word; False writes the paper's single stroke.
 
     Returns
     -------
     dict of str to Path
+
+    Raises
+    ------
+    UsageError
+        A bad override (one that sets ``delayed_strokes`` too), a missing checkpoint.
     """
     from prg.checks import check_values
     from prg.commands.cli import compose_config
     from prg.commands.settings import writer_from_config
 
-    args = [f"family={family}", *overrides]
+    if not isinstance(delayed_strokes, bool):
+        raise UsageError(f"delayed_strokes must be true or false, got {delayed_strokes!r}")
+    clash = next((o for o in overrides if sets_delayed_strokes(o)), None)
+    if clash is not None:
+        raise UsageError(
+            f"robot.write_overrides: {clash!r}: delayed_strokes is set by the study's "
+            "top-level delayed_strokes"
+        )
+    args = [f"family={family}", f"delayed_strokes={str(delayed_strokes).lower()}", *overrides]
     if ckpt is not None:
         args.append(f"ckpt={Path(ckpt).resolve()}")
     try:

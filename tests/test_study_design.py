@@ -275,6 +275,21 @@ def test_the_shipped_studies_follow_the_paper():
     assert one.completion["code"] and "{code}" in one.completion["url"]
 
 
+def test_delayed_strokes_are_on_unless_the_study_file_says_false():
+    import yaml
+
+    for name in ("turing", "readability"):
+        doc = yaml.safe_load((REPO / f"conf/study/{name}.yaml").read_text())
+        assert doc["delayed_strokes"] is True  # written out, not left to the default
+        assert load_study(REPO / f"conf/study/{name}.yaml").delayed_strokes is True
+        single = load_study(REPO / f"conf/study/{name}.yaml", ["delayed_strokes=false"])
+        assert single.delayed_strokes is False
+    assert turing().delayed_strokes is True and readability().delayed_strokes is True
+    assert turing(delayed_strokes=False).delayed_strokes is False
+    assert turing().capture["delayed_max_size"] == 0.35
+    assert turing(capture={"delayed_max_size": 0.5}).capture["delayed_max_size"] == 0.5
+
+
 def test_the_analysis_reads_the_same_study_files():
     from studies.analysis.config import load_config
 
@@ -311,6 +326,16 @@ def test_overrides_change_nested_settings(tmp_path):
         ("equivalence_margin=1.5", "equivalence_margin must be a number in"),
         ("colour=red", "unknown key 'colour'"),
         ("capture.on_lift=ignore", "capture.on_lift must be one of restart, flag"),
+        ("delayed_strokes=maybe", r"delayed_strokes must be true \(.*\) or false \(one stroke\)"),
+        ("delayed_strokes=1", "delayed_strokes must be true"),
+        ("delayed_strokes=null", "delayed_strokes must be true"),
+        ("capture.delayed_max_size=0", r"capture.delayed_max_size must be a number in \(0, 1\]"),
+        ("capture.delayed_max_size=1.5", r"capture.delayed_max_size must be a number in \(0, 1\]"),
+        ("capture.delayed_max_size=true", "capture.delayed_max_size must be a number"),
+        (
+            "robot.write_overrides=[delayed_strokes=false]",
+            "robot.write_overrides: 'delayed_strokes=false': set the study's top-level",
+        ),
         (
             "attention_checks=[{after_trial: 99, instruction: x, expect: {choose_sample: 1}}]",
             r"attention_checks\[0\].after_trial must be between 0 and 10",
@@ -371,6 +396,10 @@ FILE_CASES = [
     ("foils", 1000, "foils must be an integer from 1 to 9"),
     # settings of the wrong type or name
     ("save.download", "maybe", "save.download must be true or false"),
+    ("delayed_strokes", "yes please", "delayed_strokes must be true"),
+    ("delayed_strokes", 0, "delayed_strokes must be true"),
+    ("capture.delayed_max_size", float("nan"), "capture.delayed_max_size must be a number"),
+    ("capture.delayed_max_size", "0.3", "capture.delayed_max_size must be a number"),
     ("page.title", 5, "page.title must be text"),
     ("completion.colour", "red", "completion: unknown key 'colour'"),
     ("analysis.alhpa", 0.1, "analysis: unknown key 'alhpa'"),

@@ -9,6 +9,7 @@ import pytest
 from PIL import Image
 
 from prg.errors import UsageError
+from prg.pipeline.compose import compose_word
 from prg.pipeline.word import WordTrajectory
 from studies.design import ROBOT
 from studies.stimuli import (
@@ -22,11 +23,22 @@ from studies.stimuli import (
     render_strokes,
     stand_ins,
     stimulus_name,
+    to_pixels,
+    trajectory_sample,
     word_strokes,
 )
 from tests.conftest_browser import capture_document, robot_dir, wobbly_word
 
 STYLE = RenderStyle(width_px=400, height_px=100, margin_px=10, stroke_px=4.0)
+
+
+def marked_word(text: str) -> WordTrajectory:
+    """A word composed as ``prg-write`` composes it (layout, connections, delayed strokes),
+    from letters that are each one up-and-down stroke (no model needed)."""
+    u = np.linspace(0, 1, 100)
+    letter = np.column_stack([0.3 * np.sin(np.pi * u), 1 - 2 * np.abs(2 * u - 1)])
+    word, _ = compose_word(np.stack([letter] * len(text)), text)
+    return word
 
 
 def ink_box(image: Image.Image, threshold: int = 128) -> tuple[int, int, int, int]:
@@ -137,6 +149,60 @@ def test_lifted_skipped_foreign_and_duplicate_samples_are_left_out_with_a_note(t
     assert len(kept.by_word["dog"]["w01"].strokes) == 2
 
 
+def test_dots_and_bars_after_the_word_are_no_pen_lift(tmp_path):
+    doc = capture_document("w02", ["it", "cat", "dog"])
+    word = np.array(doc["samples"][0]["strokes"][0])
+    top = word[:, 1].min()  # y down: the top of the word
+    dot = [[100, top - 20, 900, 0.5], [101, top - 21, 910, 0.5]]
+    doc["samples"][0]["strokes"].append(dot)
+    doc["samples"][0]["delayed"] = [1]
+    doc["samples"][1]["strokes"] += [
+        dot,
+        (word[:30] + np.array([0, 5, 0, 0])).tolist(),
+    ]  # dot, then lift
+    doc["samples"][1]["delayed"] = [1]
+    (tmp_path / "c.json").write_text(json.dumps(doc))
+    found = load_human_samples([tmp_path], ["it", "cat", "dog"])
+    assert found.writers() == {"it": ["w02"], "cat": [], "dog": ["w02"]}
+    sample = found.by_word["it"]["w02"]
+    assert not sample.lifted and sample.delayed == (1,) and len(sample.strokes) == 2
+    np.testing.assert_allclose(sample.strokes[1], np.array(dot)[:, :2] * [1, -1])
+    assert "w02/cat was written with a pen lift" in "\n".join(found.notes)
+    assert found.by_word["dog"]["w02"].delayed == ()
+    # the picture shows the dot: ink above the word's own top
+    a = np.asarray(render_sample(sample, STYLE)) < 128
+    word_top = to_pixels(sample.strokes, STYLE)[0][:, 1].min()
+    assert a[: int(word_top) - 2].any()
+    # the same file without its "delayed" list (written before it existed): a lift, as before
+    del doc["samples"][0]["delayed"]
+    (tmp_path / "c.json").write_text(json.dumps(doc))
+    assert load_human_samples([tmp_path], ["it"]).writers() == {"it": []}
+
+
+def test_with_delayed_strokes_off_the_dots_of_human_samples_are_not_drawn(tmp_path):
+    doc = capture_document("w03", ["it"])
+    doc["samples"][0]["strokes"].append([[5, 5, 900, 0.5]])
+    doc["samples"][0]["delayed"] = [1]
+    (tmp_path / "c.json").write_text(json.dumps(doc))
+    found = load_human_samples([tmp_path], ["it"], delayed_strokes=False)
+    sample = found.by_word["it"]["w03"]
+    assert len(sample.strokes) == 1 and sample.delayed == () and not sample.lifted
+    assert "1 delayed stroke(s) (dots, bars) are not drawn" in found.notes[0]
+    np.testing.assert_allclose(
+        sample.strokes[0], np.array(doc["samples"][0]["strokes"][0])[:, :2] * [1, -1]
+    )
+
+
+@pytest.mark.parametrize("delayed", [[0], [3], ["1"], [1, 1], 1, [True]])
+def test_a_bad_delayed_list_is_named(tmp_path, delayed):
+    doc = capture_document("w04", ["it"])
+    doc["samples"][0]["strokes"].append([[5, 5, 900, 0.5]])
+    doc["samples"][0]["delayed"] = delayed
+    (tmp_path / "c.json").write_text(json.dumps(doc))
+    with pytest.raises(UsageError, match=r"c.json: samples\[0\]: delayed must list strokes"):
+        load_human_samples([tmp_path], ["it"])
+
+
 def test_strokes_json_named_by_its_folder_and_word_trajectories(tmp_path):
     (tmp_path / "anna").mkdir()
     (tmp_path / "anna" / "cat.json").write_text(json.dumps([[[0, 0], [1, 1], [2, 0]]]))
@@ -236,6 +302,43 @@ def test_pilot_stand_ins_are_distinct_deterministic_and_named_as_such():
         np.testing.assert_array_equal(a.strokes[0], b.strokes[0])
 
 
+def test_robot_words_are_drawn_with_their_dots_above_the_stem(tmp_path):
+    marked_word("in").to_json(tmp_path / "in.json")
+    robot = load_robot_words(tmp_path, ["in"])["in"]
+    assert robot.delayed == (1,) and len(robot.strokes) == 2  # the body, then the i's dot
+    image = np.asarray(render_sample(robot, STYLE)) < 128
+    body, dot = to_pixels(robot.strokes, STYLE)
+    cx, cy = np.round(dot.mean(axis=0)).astype(int)
+    column = image[:, cx - 1 : cx + 2].any(axis=1)
+    stem = body[np.abs(body[:, 0] - cx) < 2, 1].min()  # the stem's top under the dot
+    assert column[cy]  # ink at the dot
+    assert not column[cy + 3 : int(stem) - 3].all()  # paper between the dot and the stem
+    assert cy < stem - STYLE.stroke_px  # above the stem
+
+    single = load_robot_words(tmp_path, ["in"], delayed_strokes=False)["in"]
+    assert len(single.strokes) == 1 and single.delayed == ()
+    image = np.asarray(render_sample(single, STYLE)) < 128
+    (body,) = to_pixels(single.strokes, STYLE)
+    assert not image[: int(body[:, 1].min() - STYLE.stroke_px)].any()  # nothing above the word
+
+
+def test_pilot_stand_ins_keep_the_robots_dots_and_bars_as_delayed_strokes():
+    robot = trajectory_sample(marked_word("fit"), ROBOT, "composed")
+    assert robot.delayed == (1, 2, 3)  # f's bar, i's dot, t's bar
+    for made in stand_ins(robot, 3, seed=4):
+        assert made.delayed == robot.delayed and not made.lifted
+        body = made.strokes[0]
+        for k in made.delayed:
+            before, after = robot.strokes[k], made.strokes[k]
+            assert np.ptp(after, axis=0).max() <= 1.5 * np.ptp(before, axis=0).max() + 1e-9
+            # it moves with the word: still next to the nearest point of the wobbled body
+            gap = np.hypot(*(body - after.mean(axis=0)).T).min()
+            original = np.hypot(*(robot.strokes[0] - before.mean(axis=0)).T).min()
+            assert gap < original + 0.3 * np.ptp(robot.strokes[0][:, 1])
+    for made in stand_ins(robot, 2, seed=4, delayed_strokes=False):
+        assert len(made.strokes) == 1 and made.delayed == ()
+
+
 def test_pen_up_travel_is_not_ink():
     pts = np.array([[0, 0], [1, 0], [2, 0], [3, 0], [4, 0], [5, 0]], dtype=float)
     traj = WordTrajectory(pts, [0, 0, 1, 1, 2, 2], ["letter", "space", "letter"], "a b")
@@ -261,3 +364,19 @@ def test_robot_writing_names_a_missing_checkpoint_and_a_bad_override(tmp_path):
         generate_robot_words(["ab"], tmp_path, ckpt=tmp_path / "nope.ckpt")
     with pytest.raises(UsageError, match=r"robot.write_overrides"):
         generate_robot_words(["ab"], tmp_path, overrides=["generate.nonsense=1"])
+    for override in ("delayed_strokes=false", "++delayed_strokes=true"):
+        with pytest.raises(UsageError, match=r"delayed_strokes is set by the study's top-level"):
+            generate_robot_words(["ab"], tmp_path, overrides=[override])
+
+
+@pytest.mark.parametrize("delayed", [True, False])
+def test_robot_words_are_written_with_delayed_strokes_as_asked(
+    tmp_path, untrained_muse_checkpoint, delayed
+):
+    paths = generate_robot_words(
+        ["it"], tmp_path, ckpt=untrained_muse_checkpoint, delayed_strokes=delayed
+    )
+    kinds = WordTrajectory.from_json(paths["it"]).segment_kinds
+    assert kinds.count("mark") == (2 if delayed else 0)  # the i's dot and the t's bar
+    robot = load_robot_words(tmp_path, ["it"])["it"]
+    assert len(robot.delayed) == kinds.count("mark") == len(robot.strokes) - 1

@@ -275,6 +275,35 @@ def write_word(page, k: int, lift: bool = False) -> None:
     page.mouse.up()
 
 
+def draw(page, points) -> None:
+    """One pen stroke through ``points`` (canvas CSS pixels, y down) with the mouse."""
+    box = page.locator("#pad").bounding_box()
+    scale = box["width"] / page.evaluate("PRGCapture.config.canvas_width")
+    (x, y), *rest = points
+    page.mouse.move(box["x"] + x * scale, box["y"] + y * scale)
+    page.mouse.down()
+    for x, y in rest:
+        page.mouse.move(box["x"] + x * scale, box["y"] + y * scale)
+    page.mouse.up()
+
+
+def loops(n: int = 36) -> list[tuple[float, float]]:
+    """A loopy word-like path on the canvas (CSS pixels), 70 px high."""
+    return [
+        (60 + 18 * (i / 5) + 25 * math.sin(i / 5 * 6), 150 - 35 * math.cos(i / 5 * 6))
+        for i in range(n)
+    ]
+
+
+def height(points) -> float:
+    return max(p[1] for p in points) - min(p[1] for p in points)
+
+
+def size(points) -> float:
+    """The larger side of the bounding box."""
+    return max(max(p[d] for p in points) - min(p[d] for p in points) for d in (0, 1))
+
+
 def capture(page, folder: Path, writer: str, restart_on: int | None = None) -> dict:
     """Record every word of the capture page as ``writer``; returns the saved JSON."""
     page.goto((folder / "capture" / "index.html").as_uri() + f"?writer={writer}")
@@ -298,6 +327,7 @@ def test_capture_json_round_trips_into_a_runnable_study(page, tmp_path, samples)
         "turing",
         "words=[cat, dog]",
         "attention_checks=[]",
+        "delayed_strokes=false",  # the paper's single stroke
         robot=samples["robot"],
     )
     assert json.loads((unready / "manifest.json").read_text())["ready"] is False
@@ -310,6 +340,7 @@ def test_capture_json_round_trips_into_a_runnable_study(page, tmp_path, samples)
     doc = json.loads((recordings / "w0.json").read_text())
     assert (doc["schema"], doc["version"], doc["writer_id"]) == ("prg.handwriting_capture", 1, "w0")
     assert doc["canvas"]["y_down"] is True and doc["canvas"]["units"] == "css_px"
+    assert doc["delayed_strokes"] is False
     assert [s["word"] for s in doc["samples"]] == ["cat", "dog"]
     for s in doc["samples"]:
         (stroke,) = s["strokes"]  # one continuous stroke
@@ -320,7 +351,7 @@ def test_capture_json_round_trips_into_a_runnable_study(page, tmp_path, samples)
             0 <= p[0] <= doc["canvas"]["width"] and 0 <= p[1] <= doc["canvas"]["height"]
             for p in stroke
         )
-        assert s["pointer_type"] == "mouse" and s["lifted"] is False
+        assert s["pointer_type"] == "mouse" and s["lifted"] is False and s["delayed"] == []
     assert [s["restarts"] for s in doc["samples"]] == [0, 1]
     assert len(doc["samples"][1]["strokes"][0]) < 25  # only the attempt after the lift is kept
 
@@ -333,6 +364,7 @@ def test_capture_json_round_trips_into_a_runnable_study(page, tmp_path, samples)
         "participants=3",
         "completion.redirect_delay_ms=0",
         "attention_checks=[]",
+        "delayed_strokes=false",
         robot=samples["robot"],
         human=recordings,
     )
@@ -351,13 +383,15 @@ def test_capture_json_round_trips_into_a_runnable_study(page, tmp_path, samples)
     assert [r["chose_robot"] for r in rows] == ["true", "true"]
 
 
-def test_capture_page_can_flag_lifts_instead_of_restarting(page, tmp_path, samples):
+@pytest.mark.parametrize("delayed", [False, True])
+def test_capture_page_can_flag_lifts_instead_of_restarting(page, tmp_path, samples, delayed):
     folder = build(
         tmp_path / "b",
         "turing",
         "words=[cat]",
         "attention_checks=[]",
         "capture.on_lift=flag",
+        f"delayed_strokes={str(delayed).lower()}",
         robot=samples["robot"],
     )
     page.goto((folder / "capture" / "index.html").as_uri())
@@ -372,7 +406,8 @@ def test_capture_page_can_flag_lifts_instead_of_restarting(page, tmp_path, sampl
         page.click("#next")
     doc = json.loads(Path(download.value.path()).read_text())
     (sample,) = doc["samples"]
-    assert sample["lifted"] is True and len(sample["strokes"]) == 2
+    # with delayed strokes on, the second half of the word is too big for a dot or a bar
+    assert sample["lifted"] is True and len(sample["strokes"]) == 2 and sample["delayed"] == []
     assert sample["strokes"][1][0][2] > sample["strokes"][0][-1][2]  # one clock per word
     recordings = tmp_path / "rec"
     recordings.mkdir()
@@ -385,7 +420,152 @@ def test_capture_page_can_flag_lifts_instead_of_restarting(page, tmp_path, sampl
     }
 
 
+def test_capture_page_keeps_dots_and_bars_after_the_word_and_clears_a_lift(page, tmp_path, samples):
+    folder = build(
+        tmp_path / "b", "turing", "words=[ink, cat]", "attention_checks=[]", robot=samples["robot"]
+    )  # delayed strokes on, lifts restart the word: the shipped study
+    page.goto((folder / "capture" / "index.html").as_uri() + "?writer=w5")
+    assert "dot the i's and j's and cross the t's and f's" in page.text_content("#intro-text")
+    fraction = page.evaluate("PRGCapture.config.delayed_max_size")
+    word = loops()
+    limit = fraction * height(word)  # the largest dot or bar the page keeps
+    top = min(y for _, y in word)
+    dot = [(120, top - 25), (120 + 0.1 * limit, top - 25)]
+    bar = [(180 - 0.4 * limit, top + 10), (180 + 0.4 * limit, top + 10)]
+    big = [(300, 150), (300 + 1.4 * limit, 150 - 1.2 * limit)]  # the rest of a word: a lift
+    page.click("#begin")
+    assert "dot the i's" in page.text_content("#task")
+    with page.expect_download() as download:
+        assert page.text_content("#word") == "ink"
+        for stroke in (word, dot, bar):
+            draw(page, stroke)
+        assert page.text_content("#message") == ""
+        page.click("#next")
+        assert page.text_content("#word") == "cat"
+        draw(page, word)
+        draw(page, big)
+        assert "word was cleared" in page.text_content("#message")
+        assert page.is_disabled("#next")  # nothing left to keep
+        draw(page, word)
+        draw(page, bar)
+        page.click("#next")
+    doc = json.loads(Path(download.value.path()).read_text())
+    assert doc["delayed_strokes"] is True and doc["delayed_max_size"] == fraction
+    ink, cat = doc["samples"]
+    assert (len(ink["strokes"]), ink["delayed"], ink["lifted"], ink["restarts"]) == (
+        3,
+        [1, 2],
+        False,
+        0,
+    )
+    assert (len(cat["strokes"]), cat["delayed"], cat["lifted"], cat["restarts"]) == (
+        2,
+        [1],
+        False,
+        1,
+    )
+    for sample in (ink, cat):  # the page's rule, checked on what it recorded
+        first = sample["strokes"][0]
+        assert len(first) >= 30 and height(first) == pytest.approx(height(word), abs=2)
+        for k in sample["delayed"]:
+            assert size(sample["strokes"][k]) <= fraction * height(first)
+    assert cat["strokes"][1][0][2] > cat["strokes"][0][-1][2]  # the bar after the word
+
+    recordings = tmp_path / "rec"
+    recordings.mkdir()
+    (recordings / "w5.json").write_text(json.dumps(doc))
+    from studies.stimuli import load_human_samples
+
+    found = load_human_samples([recordings], ["ink", "cat"])
+    assert found.writers() == {"ink": ["w5"], "cat": ["w5"]} and found.notes == []
+    assert [len(found.by_word[w]["w5"].strokes) for w in ("ink", "cat")] == [3, 2]
+    assert found.by_word["ink"]["w5"].delayed == (1, 2)
+
+
+def test_capture_page_flags_a_lift_after_the_dots(page, tmp_path, samples):
+    folder = build(
+        tmp_path / "b",
+        "turing",
+        "words=[ink]",
+        "attention_checks=[]",
+        "capture.on_lift=flag",
+        robot=samples["robot"],
+    )
+    page.goto((folder / "capture" / "index.html").as_uri() + "?writer=w6")
+    page.click("#begin")
+    word = loops()
+    limit = page.evaluate("PRGCapture.config.delayed_max_size") * height(word)
+    with page.expect_download() as download:
+        draw(page, word)
+        draw(page, [(120, 60), (120 + 0.5 * limit, 60)])  # a bar
+        assert page.text_content("#message") == ""
+        draw(page, [(300, 150), (300 + 2.4 * limit, 150)])  # just too long for a bar
+        assert "marked" in page.text_content("#message")
+        page.click("#next")
+    (sample,) = json.loads(Path(download.value.path()).read_text())["samples"]
+    assert (len(sample["strokes"]), sample["delayed"], sample["lifted"]) == (3, [1], True)
+    recordings = tmp_path / "rec"
+    recordings.mkdir()
+    (recordings / "w6.json").write_text(
+        json.dumps(json.loads(Path(download.value.path()).read_text()))
+    )
+    from studies.stimuli import load_human_samples
+
+    found = load_human_samples([recordings], ["ink"])
+    assert found.writers() == {"ink": []} and "w6/ink was written with a pen lift" in found.notes[0]
+
+
 # ---------------------------------------------------------------------------- prg-study build
+def read_js_config(path: Path) -> dict:
+    """The object that a ``config.js`` (``window.X = {...};``) assigns."""
+    text = path.read_text()
+    return json.loads(text[text.index("=") + 1 :].strip().rstrip(";"))
+
+
+@pytest.mark.parametrize("delayed", [True, False])
+def test_the_robot_writes_and_the_writers_are_asked_as_delayed_strokes_says(
+    tmp_path, untrained_muse_checkpoint, delayed
+):
+    from prg.pipeline.word import WordTrajectory
+
+    out = tmp_path / "b"
+    args = ["build", str(REPO / TURING), "--out", str(out), "-q", "--pilot"]
+    args += ["--ckpt", str(untrained_muse_checkpoint)]
+    for setting in (
+        "words=[it, cat]",
+        "attention_checks=[]",
+        "participants=2",
+        f"delayed_strokes={str(delayed).lower()}",
+    ):
+        args += ["--set", setting]
+    assert main(args) == 0
+    marks = {
+        w: WordTrajectory.from_json(out / "sources" / "robot" / f"{w}.json").segment_kinds.count(
+            "mark"
+        )
+        for w in ("it", "cat")
+    }
+    assert marks == ({"it": 2, "cat": 1} if delayed else {"it": 0, "cat": 0})
+    assert read_js_config(out / "capture" / "config.js")["delayed_strokes"] is delayed
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["delayed_strokes"] is delayed and manifest["pilot"] is True
+    assert json.loads((out / "config.json").read_text())["delayed_strokes"] is delayed
+
+
+@pytest.mark.parametrize("delayed", [True, False])
+def test_ready_robot_words_without_marks_are_noted_when_delayed_strokes_are_on(
+    tmp_path, samples, capsys, delayed
+):
+    build(
+        tmp_path / "b", "turing", f"delayed_strokes={str(delayed).lower()}", robot=samples["robot"]
+    )
+    err = capsys.readouterr().err
+    noted = "robot words without delayed strokes (dots, bars) although delayed_strokes is true"
+    assert (noted in err) is delayed
+    if delayed:  # the study words with an i, j, t or f
+        assert f"{noted}: cat, ink;" in err
+
+
 def test_without_human_samples_the_build_says_what_is_missing(page, tmp_path, samples, capsys):
     out = build(tmp_path / "b", "readability", robot=samples["robot"])
     err = capsys.readouterr().err

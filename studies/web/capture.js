@@ -1,23 +1,28 @@
 /*
- * prg-study capture page: records a writer's pen trajectories, one word at a time, written in
- * one continuous stroke (the paper's group 1). No dependencies but common.js; runs from file://.
+ * prg-study capture page: records a writer's pen trajectories, one word at a time, the word
+ * written in one continuous stroke (the paper's group 1), then, with delayed strokes on, the dots
+ * of its i's and j's and the bars of its t's and f's. No dependencies but common.js; runs from
+ * file://.
  *
  * Reads window.PRG_CAPTURE_CONFIG (config.js, written by `prg-study build`): words, canvas size,
  * on_lift ("restart": lifting the pen clears the word and the writer starts again; "flag": the
- * extra strokes are kept and the sample is marked lifted), post_url, app_version.
+ * extra strokes are kept and the sample is marked lifted), delayed_strokes (true: a small stroke
+ * after the word is a dot or a bar, not a lift), delayed_max_size, post_url, app_version.
  * URL parameter: writer=ID fills in the writer id.
  *
  * Saves one JSON document per writer (downloaded, and POSTed as text/plain when post_url
  * is set):
  *   { "schema": "prg.handwriting_capture", "version": 1, "writer_id": "w01",
  *     "study": ..., "app_version": ..., "started_at": ISO, "finished_at": ISO, "user_agent": ...,
- *     "on_lift": "restart",
+ *     "on_lift": "restart", "delayed_strokes": true, "delayed_max_size": 0.35,
  *     "canvas": { "width": 900, "height": 300, "units": "css_px", "y_down": true,
  *                 "device_pixel_ratio": 2, "baseline_y": 195 },
  *     "samples": [ { "word": "cat", "strokes": [[[x, y, t_ms, pressure], ...], ...],
- *                    "lifted": false, "restarts": 0, "skipped": false, "pointer_type": "pen",
- *                    "started_at": ISO, "duration_ms": 1830.4 }, ... ] }
- * x, y in canvas CSS pixels (y down), t_ms from the sample's first pen-down.
+ *                    "delayed": [1], "lifted": false, "restarts": 0, "skipped": false,
+ *                    "pointer_type": "pen", "started_at": ISO, "duration_ms": 1830.4 }, ... ] }
+ * x, y in canvas CSS pixels (y down), t_ms from the sample's first pen-down. "delayed" lists the
+ * strokes (by index, never 0: the first stroke is the word) kept as delayed strokes; files
+ * written before it have no "delayed" and read as having none.
  */
 (function () {
   "use strict";
@@ -43,6 +48,30 @@
 
   function baselineY() { return Math.round(cfg.canvas_height * 0.65); }
 
+  // Delayed strokes on: after the word (the first stroke), a stroke is a dot or a bar when its
+  // bounding box is no taller than delayed_max_size (e.g. 0.35) times the first stroke's height
+  // and no wider than twice that (a bar is flat but can be long); a larger one is a pen lift
+  // (on_lift decides what happens). A letter written after a lift is at least as tall as the
+  // x-height, half or more of a word's height, so it does not pass as a mark.
+  function delayedOn() { return cfg.delayed_strokes === true; }
+  function maxDelayedSize() {
+    var f = Number(cfg.delayed_max_size);
+    return f > 0 ? f : 0.35;
+  }
+  function box(points) {
+    var xs = points.map(function (p) { return p[0]; });
+    var ys = points.map(function (p) { return p[1]; });
+    return {
+      width: Math.max.apply(null, xs) - Math.min.apply(null, xs),
+      height: Math.max.apply(null, ys) - Math.min.apply(null, ys),
+    };
+  }
+  function isDelayedStroke(first, later) {
+    var limit = maxDelayedSize() * box(first).height;
+    var b = box(later);
+    return b.width <= 2 * limit && b.height <= limit;
+  }
+
   function intro() {
     var input = el("input", { type: "text", id: "writer-id", autocomplete: "off", spellcheck: "false", "aria-label": "writer id" });
     input.value = params.get("writer") || "";
@@ -65,9 +94,11 @@
     check();
     show([
       el("h1", { text: "Handwriting recording" }),
-      el("p", { text: "You will see " + cfg.words.length + " words, one at a time. Write each word in cursive handwriting " +
+      el("p", { id: "intro-text", text: "You will see " + cfg.words.length + " words, one at a time. Write each word in cursive handwriting " +
         "in the box, in one continuous movement: do not lift the pen (or finger, or mouse button) until the word is finished. " +
-        "Dots and crossings are not needed." }),
+        (delayedOn()
+          ? "Then dot the i's and j's and cross the t's and f's, as you usually do; keep the dots and bars small."
+          : "Dots and crossings are not needed.") }),
       el("p", { text: "Use a pen or stylus if you have one. Write at your usual size along the grey line." }),
       el("p", {}, [el("label", { for: "writer-id", text: "Writer id: " }), input]),
       hint,
@@ -96,7 +127,7 @@
 
     function reset() {
       sample = {
-        word: text, strokes: [], lifted: false, restarts: sample ? sample.restarts : 0,
+        word: text, strokes: [], delayed: [], lifted: false, restarts: sample ? sample.restarts : 0,
         skipped: false, pointer_type: null, started_at: null, duration_ms: 0, t0: null,
       };
       drawing = null;
@@ -149,19 +180,9 @@
       if (event.pointerType === "mouse" && event.button !== 0) return;
       if (drawing) return;
       event.preventDefault();
-      if (sample.strokes.length > 0) {  // the pen was lifted and put down again
-        if (cfg.on_lift === "restart") {
-          var restarts = sample.restarts + 1;
-          reset();
-          sample.restarts = restarts;
-          message.className = "error";
-          message.textContent = "The pen was lifted, so the word was cleared: please write it again in one movement.";
-        } else {
-          sample.lifted = true;
-          message.className = "error";
-          message.textContent = "The pen was lifted: this sample is marked. Clear it to start again.";
-        }
-      }
+      // the pen was lifted and put down again: without delayed strokes that is a lift now;
+      // with them, whether the new stroke is a dot or bar is known when it ends (see up)
+      if (sample.strokes.length > 0 && !delayedOn()) lifted();
       if (sample.t0 === null) {
         sample.t0 = event.timeStamp;
         sample.started_at = new Date().toISOString();
@@ -177,11 +198,36 @@
       var events = event.getCoalescedEvents ? event.getCoalescedEvents() : [];
       (events.length ? events : [event]).forEach(add);
     });
+    function lifted() {
+      if (cfg.on_lift === "restart") {
+        var restarts = sample.restarts + 1;
+        reset();
+        sample.restarts = restarts;
+        message.className = "error";
+        message.textContent = delayedOn()
+          ? "The pen was lifted before the word was finished, so the word was cleared: please write it again in one movement, then add the dots and bars."
+          : "The pen was lifted, so the word was cleared: please write it again in one movement.";
+      } else {
+        sample.lifted = true;
+        message.className = "error";
+        message.textContent = "The pen was lifted: this sample is marked. Clear it to start again.";
+      }
+    }
+
     function up(event) {
       if (!drawing || event.pointerId !== drawing.id) return;
       add(event);
       drawing = null;
-      var last = sample.strokes[sample.strokes.length - 1];
+      var index = sample.strokes.length - 1;
+      var last = sample.strokes[index];
+      if (delayedOn() && index > 0) {
+        if (isDelayedStroke(sample.strokes[0], last)) {
+          sample.delayed.push(index);
+        } else {
+          lifted();
+          if (!sample.strokes.length) return;  // cleared: the word is written again
+        }
+      }
       sample.duration_ms = last[last.length - 1][2];
       next.disabled = false;
     }
@@ -207,7 +253,9 @@
 
     show([
       el("p", { class: "progress", id: "progress", text: "Word " + (index + 1) + " of " + cfg.words.length }),
-      el("p", { text: "Write this word in one movement, without lifting the pen:" }),
+      el("p", { id: "task", text: delayedOn()
+        ? "Write this word in one movement, without lifting the pen; then dot the i's and j's and cross the t's and f's:"
+        : "Write this word in one movement, without lifting the pen:" }),
       el("p", { class: "word", id: "word", text: text }),
       pad,
       message,
@@ -227,6 +275,8 @@
       finished_at: new Date().toISOString(),
       user_agent: navigator.userAgent,
       on_lift: cfg.on_lift,
+      delayed_strokes: delayedOn(),
+      delayed_max_size: delayedOn() ? maxDelayedSize() : null,
       canvas: {
         width: cfg.canvas_width,
         height: cfg.canvas_height,
