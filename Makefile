@@ -46,6 +46,7 @@ demo: setup ## Run the whole pipeline (dvc repro): data, models, evaluation, Tab
 	@echo "Reports:  reports/table1.md, reports/coherence.md, reports/robustness.md, reports/figures/"
 	@echo "Words:    reports/dictaphone/table2.png, table2.md; <word>/<sound|image>/word.rrd (rerun FILE)"
 	@echo "Robot:    reports/simulate/ink.png, page.png, metrics.json; rerun reports/simulate/sim.rrd"
+	@echo "Export:   reports/export/word.gcode, word.hpgl, word.svg (plotters), word.mcap, word.csv (arms)"
 	@echo "Studies:  studies/turing/build/, studies/readability/build/ (index.html; capture/index.html)"
 	@echo "Runs:     mlflow ui --backend-store-uri sqlite:///mlruns.db   (then http://127.0.0.1:5000)"
 	@echo "Rerun:    rerun --web-viewer reports/simulate/sim.rrd   (or plain \`rerun FILE\` with a display)"
