@@ -410,8 +410,6 @@ CASES = [
         2,
         "cm wide",
     ),
-    case("export-corrupt-word", "prg-export", "word={bad_json}", 2, "not valid JSON"),
-    case("export-out-below-file", "prg-export", "word={word} out_dir={file}/x", 2, "a-file"),
     case("export-servo-garbage", "prg-export", "word={word} gcode.pen=laser", 2, "gcode.pen"),
     case(
         "export-zero-slow-down", "prg-export", "word={word} limits.max_slow_down=0", 2, "max_slow"

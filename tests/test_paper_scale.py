@@ -205,6 +205,7 @@ def test_a_failed_training_stops_the_others_and_fails_with_one_line(tmp_path, sm
     assert set(timings["stages"]["train"]["jobs"]) == {"cvae", "muse", "classifiers"}
 
 
+@pytest.mark.slow  # 140 s; the runner itself is tested above, this is its second profile
 def test_the_converged_profile_trains_the_fast_recipe_into_its_own_folder(tmp_path, small_dataset):
     result = _run(
         tmp_path,

@@ -91,7 +91,14 @@ SWEEPS = {
 }
 
 
-@pytest.mark.parametrize("launcher", SWEEPS)
+@pytest.mark.parametrize(
+    "launcher",
+    [
+        "basic",
+        # slow (44 s): the concurrent writes to one store are also tests/test_scale_out.py's
+        pytest.param("joblib", marks=pytest.mark.slow),
+    ],
+)
 def test_multirun_jobs_land_under_one_parent_run(tmp_path, small_dataset, launcher):
     result = run_cli(
         "prg-train",
