@@ -62,6 +62,7 @@ def test_a_writer_takes_arrays_for_every_channel_and_loads_its_model_once(
     folder = result.save(tmp_path / "out", record=False)
     assert sorted(p.name for p in folder.iterdir()) == [
         "dmp_rollout.csv",
+        "motion.csv",
         "word.json",
         "word.png",
         "word.svg",

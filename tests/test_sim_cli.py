@@ -91,6 +91,7 @@ def test_text_runs_prg_write_first_with_its_options(tmp_path, untrained_muse_che
         "word.png",
         "word.svg",
         "dmp_rollout.csv",
+        "motion.csv",
     }
     assert OUTPUTS - {p.name for p in out.iterdir()} == {"sim.rrd"}  # record=false
     metrics = json.loads((out / "metrics.json").read_text())

@@ -39,6 +39,7 @@ def test_writes_the_word_its_renderings_rollout_and_an_mlflow_run(tmp_path, chec
         "word.png",
         "word.svg",
         "dmp_rollout.csv",
+        "motion.csv",
         "word.rrd",
     }
     word = WordTrajectory.from_json(out / "word.json")
@@ -54,6 +55,11 @@ def test_writes_the_word_its_renderings_rollout_and_an_mlflow_run(tmp_path, chec
         rows = list(csv.DictReader(f))
     assert float(rows[0]["t_s"]) == 0.0
     assert float(rows[-1]["t_s"]) == pytest.approx(word.duration_s, rel=1e-6)
+    # the whole timed motion (its pen-up flags on real letters: tests/test_marks.py)
+    motion = np.loadtxt(out / "motion.csv", delimiter=",", skiprows=1)  # t, x, y, pen_down
+    assert np.all(np.diff(motion[:, 0]) > 0) and set(motion[:, 3]) <= {0.0, 1.0}
+    assert motion[-1, 0] == pytest.approx(word.duration_s, rel=1e-6)
+    np.testing.assert_allclose(motion[0, 1:3], word.points[0], atol=1e-5)
     client = MlflowClient(sqlite_uri(tmp_path / "mlruns.db"))
     (run,) = client.search_runs(
         [client.get_experiment_by_name("prg").experiment_id], "tags.`prg.task` = 'write'"

@@ -122,9 +122,13 @@ class WriteResult:
         return self.word.text
 
     def save(self, folder: str | os.PathLike, record: bool = False) -> Path:
-        """``word.json``, ``word.png``, ``word.svg``, ``dmp_rollout.csv`` and (``record``) the
-        Rerun recording ``word.rrd`` into ``folder``, all or nothing (through a staging folder;
-        files already in ``folder`` under other names are kept)."""
+        """``word.json``, ``word.png``, ``word.svg``, ``dmp_rollout.csv`` (the body's DMP
+        rollout), ``motion.csv`` (the whole timed pen motion, delayed strokes included, with its
+        pen-down flag: :func:`prg.sim.word_samples` at ``settings.samples_per_s``) and
+        (``record``) the Rerun recording ``word.rrd`` into ``folder``, all or nothing (through a
+        staging folder; files already in ``folder`` under other names are kept)."""
+        from prg.sim.writing import word_samples
+
         folder = Path(folder)
         with staged_outputs(folder) as staging:
             if record:
@@ -140,6 +144,15 @@ class WriteResult:
                 header="t_s,x_cm,y_cm",
                 comments="",
                 fmt="%.6f",
+            )
+            xy, t, down = word_samples(self.word, 1.0 / self.settings.samples_per_s)
+            np.savetxt(
+                staging / "motion.csv",
+                np.column_stack([t, xy, down]),
+                delimiter=",",
+                header="t_s,x_cm,y_cm,pen_down",
+                comments="",
+                fmt=["%.6f", "%.6f", "%.6f", "%d"],
             )
         return folder
 

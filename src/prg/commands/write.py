@@ -14,7 +14,7 @@ channel; ``trajectories`` (a JSON file of per-letter pen strokes) is the T chann
 ``text`` the letters are read from the other channels by the model (S given I and/or T).
 
 Writes ``word.json`` (points, segments, text, timing, DMP), ``word.png``, ``word.svg`` and
-``dmp_rollout.csv`` into ``out_dir`` (atomically, through a staging folder) and, with
+``dmp_rollout.csv``, ``motion.csv`` into ``out_dir`` (atomically, through a staging folder) and, with
 ``mlflow=true``, an MLflow run holding them. The work is :class:`prg.writer.Writer`'s; this module
 reads the config and saves the outputs.
 """
@@ -49,7 +49,8 @@ def write(cfg: DictConfig) -> tuple[WriteResult, Path]:
         result.save(out_dir, record=cfg.record)
         word = result.word
         log.info(
-            "wrote %r with %s in %.0f ms: %d points, %.1f cm, %.1f s, DMP %d bases -> %s",
+            "wrote %r with %s in %.0f ms: %d points, %.1f cm, %.1f s, DMP %d bases, "
+            "%d dots and bars -> %s",
             word.text,
             writer.family,
             result.timings["total"] * 1000,
@@ -57,6 +58,7 @@ def write(cfg: DictConfig) -> tuple[WriteResult, Path]:
             word.path_length,
             word.duration_s,
             word.dmp.n_basis,
+            word.segment_kinds.count("mark"),
             out_dir,
         )
         if run is not None:
