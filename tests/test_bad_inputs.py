@@ -1,7 +1,7 @@
 """Bad input to every command: one line naming the problem, exit code 2 (usage) or 1 (run
 time), no traceback, and nothing written.
 
-One table, ``CASES``, covers the seven commands. ``{name}`` placeholders in a case's arguments
+One table, ``CASES``, covers the eight commands. ``{name}`` placeholders in a case's arguments
 are files made once by :func:`bad_files` (a corrupt WAV, a text file named ``.ckpt``, a
 truncated checkpoint ...); ``{tmp}`` is the test's own folder, which is also the working
 directory and ``paths.root_dir``, so even a default output path lands where the before/after
