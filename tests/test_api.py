@@ -7,6 +7,7 @@ import sys
 
 import numpy as np
 
+from prg.pipeline.word import WordTrajectory
 from tests.conftest import REPO
 
 
@@ -73,3 +74,19 @@ def test_a_writer_takes_arrays_for_every_channel_and_loads_its_model_once(
         writer.write()
     with pytest.raises(UsageError, match="images= gives 2 letters"):
         writer.write(text="cat", images=images[:2])
+
+
+def test_saving_a_word_into_a_used_folder_leaves_no_stale_recording(
+    untrained_muse_checkpoint, tmp_path
+):
+    from prg import Writer
+
+    writer = Writer.from_checkpoint(untrained_muse_checkpoint)
+    folder = tmp_path / "out"
+    writer.write(text="ab").save(folder, record=True)
+    assert (folder / "word.rrd").is_file()
+    (folder / "notes.txt").write_text("the user's own file\n")
+    writer.write(text="cd").save(folder, record=False)
+    assert not (folder / "word.rrd").exists()  # the recording of "ab" would sit beside "cd"
+    assert (folder / "notes.txt").read_text() == "the user's own file\n"
+    assert WordTrajectory.from_json(folder / "word.json").text == "cd"

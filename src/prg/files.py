@@ -23,7 +23,7 @@ import json
 import os
 import re
 import shutil
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -211,9 +211,12 @@ def _swap_folder(staging: Path, final: Path) -> None:
     _remove(old)
 
 
-def _move_entries(staging: Path, target: Path) -> None:
+def _move_entries(staging: Path, target: Path, owned: Sequence[str] = ()) -> None:
     target.mkdir(exist_ok=True)
     remove_stale(target)
+    made = {item.name for item in staging.iterdir()}
+    for name in sorted(set(owned) - made):  # an earlier run's output this run did not make
+        _remove(target / name)
     for item in sorted(staging.iterdir()):
         destination = target / item.name
         old = _temp_name(destination, "old")
@@ -230,15 +233,19 @@ def staged_folder(final: str | os.PathLike):
     return _staged(Path(final), _swap_folder)
 
 
-def staged_outputs(target: str | os.PathLike):
+def staged_outputs(target: str | os.PathLike, owned: Sequence[str] = ()):
     """Context manager: an empty hidden folder beside ``target``; when the block ends normally
     each entry is moved into ``target`` (created then; an entry replaces the one of the same
     name, other entries of ``target`` stay), otherwise it is removed and ``target`` is untouched.
 
+    ``owned`` names the entries this kind of output may hold: those the block did not make this
+    time are removed from ``target`` (an optional file left by an earlier run, e.g. a recording
+    the new run was asked not to make, never sits stale beside the new outputs).
+
     Every output is complete in the staging folder before the first one is moved, so a failure
     while writing leaves no mix of old and new outputs.
     """
-    return _staged(Path(target), _move_entries)
+    return _staged(Path(target), lambda staging, final: _move_entries(staging, final, owned))
 
 
 __all__ = [

@@ -54,6 +54,10 @@ PathOrImages = str | os.PathLike | Sequence[np.ndarray]
 PathOrStrokes = str | os.PathLike | Sequence[np.ndarray]
 
 
+#: What :meth:`WriteResult.save` writes into a folder (and so owns there).
+WORD_FILES = ("word.json", "word.png", "word.svg", "dmp_rollout.csv", "motion.csv", "word.rrd")
+
+
 @dataclass(frozen=True)
 class Perception:
     """What Perceive made of a command: the word's letters and the per-letter model inputs.
@@ -126,11 +130,12 @@ class WriteResult:
         rollout), ``motion.csv`` (the whole timed pen motion, delayed strokes included, with its
         pen-down flag: :func:`prg.sim.word_samples` at ``settings.samples_per_s``) and
         (``record``) the Rerun recording ``word.rrd`` into ``folder``, all or nothing (through a
-        staging folder; files already in ``folder`` under other names are kept)."""
+        staging folder; other files already in ``folder`` are kept, but a ``word.rrd`` left
+        by an earlier word is removed when ``record`` is off)."""
         from prg.sim.writing import word_samples
 
         folder = Path(folder)
-        with staged_outputs(folder) as staging:
+        with staged_outputs(folder, owned=WORD_FILES) as staging:
             if record:
                 self.record(staging / "word.rrd")
             self.word.to_json(staging / "word.json")
