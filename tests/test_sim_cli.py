@@ -75,6 +75,9 @@ def test_simulates_a_word_json_into_every_output_and_an_mlflow_run(tmp_path, wor
 
 def test_text_runs_prg_write_first_with_its_options(tmp_path, untrained_muse_checkpoint):
     out = tmp_path / "out"
+    out.mkdir()
+    (out / "sim.rrd").write_text("an earlier word's recording")  # stale with record=false
+    (out / "notes.txt").write_text("the user's own file")
     result = simulate_cli(
         "text=a",
         f"ckpt={untrained_muse_checkpoint}",
@@ -93,7 +96,8 @@ def test_text_runs_prg_write_first_with_its_options(tmp_path, untrained_muse_che
         "dmp_rollout.csv",
         "motion.csv",
     }
-    assert OUTPUTS - {p.name for p in out.iterdir()} == {"sim.rrd"}  # record=false
+    assert OUTPUTS - {p.name for p in out.iterdir()} == {"sim.rrd"}  # record=false: removed
+    assert (out / "notes.txt").read_text() == "the user's own file"
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["text"] == "a"
     assert metrics["word_height_cm"] <= 2.0 + 1e-6

@@ -80,7 +80,7 @@ def simulate(cfg: DictConfig) -> tuple[Any, Path]:
         writer = writer_from_config(cfg)
     tags = {"prg.robot": robot.name}
     with task_run(cfg, "simulate", tags, enabled=cfg.mlflow) as run:
-        with staged_outputs(out_dir) as staging:
+        with staged_outputs(out_dir, owned=(*OUTPUTS, "sim.rrd", "word")) as staging:
             if given is None:
                 written = writer.write(text, cfg.audio, cfg.images, cfg.trajectories)
                 written.save(staging / "word", record=cfg.record)
