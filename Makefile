@@ -47,8 +47,15 @@ demo: setup ## Run the whole pipeline (dvc repro): data, models, evaluation, Tab
 	@echo "Words:    reports/dictaphone/table2.png, table2.md; <word>/<sound|image>/word.rrd (rerun FILE)"
 	@echo "Robot:    reports/simulate/ink.png, page.png, metrics.json; rerun reports/simulate/sim.rrd"
 	@echo "Export:   reports/export/word.gcode, word.hpgl, word.svg (plotters), word.mcap, word.csv (arms)"
-	@echo "Studies:  studies/turing/build/, studies/readability/build/ (index.html; capture/index.html)"
-	@echo "Runs:     mlflow ui --backend-store-uri sqlite:///mlruns.db   (then http://127.0.0.1:5000)"
+	@echo "Studies:  studies/turing/build/, studies/readability/build/: NOT READY while no human samples are"
+	@echo "          given (human.dirs); writers record them with capture/index.html; index.html lists what is missing"
+	@echo "Pilots:   studies/turing/pilot/index.html, studies/readability/pilot/index.html: PILOT copies that"
+	@echo "          run end to end with stand-ins for the human samples (try the pages; never for data)"
+	@echo "Analysis: reports/study/turing/report.html, reports/study/readability/report.html: on SIMULATED"
+	@echo "          participants (prg-study simulate), each estimate shown beside the simulation's truth"
+	@echo "Runs:     mlflow ui --backend-store-uri sqlite:///mlruns.db   then open"
+	@echo "          http://127.0.0.1:5000/#/experiments/1/runs?workflowType=machine_learning (training runs;"
+	@echo "          prg-tasks holds evaluate/write/simulate/dictaphone; UI: switch GenAI -> Model training)"
 	@echo "Rerun:    rerun --web-viewer reports/simulate/sim.rrd   (or plain \`rerun FILE\` with a display)"
 	@echo "Results:  make results SNAPSHOT=1   (the README's tables from these reports)"
 
@@ -84,6 +91,7 @@ bench: setup ## Run the benchmarks (tables printed, JSON under benchmarks/result
 	$(BIN)/python benchmarks/bench_write.py --speech
 	$(BIN)/python benchmarks/bench_speech.py
 	$(BIN)/python benchmarks/bench_simulate.py
+	$(BIN)/python benchmarks/bench_startup.py
 	$(MAKE) results
 
 results: setup ## benchmarks/results.md and the README's result tables from the JSON (after `make demo`: SNAPSHOT=1)

@@ -17,12 +17,20 @@
 Everything is written into a hidden folder beside the target and renamed into place at the end.
 Without enough human samples the build is *not ready*: it still writes the robot stimuli and the
 capture page, and the questionnaire page says what is missing (``BuildReport.missing``).
+
+A *pilot* build (``pilot=True``, ``prg-study build --pilot``; default folder
+``studies/<name>/pilot/``) runs end to end before the human writers have written: stand-ins made
+from the robot's samples replace the missing ones. It is kept apart from a study's data: every
+page shows a PILOT banner (and "PILOT" in its title), ``app_version`` ends in ``-pilot`` (the
+analysis refuses to mix such rows with others), the answers are never POSTed (download only, in a
+file named ``PILOT_...``) and its completion code starts with ``PILOT-``.
 """
 
 from __future__ import annotations
 
 import csv
 import hashlib
+import html
 import io
 import json
 import shutil
@@ -33,6 +41,7 @@ from importlib import resources
 from pathlib import Path
 
 import prg
+from prg.errors import UsageError
 from prg.files import staged_folder
 from studies.design import Row, balance_notes, design_rows
 from studies.design_config import StudySettings
@@ -52,8 +61,9 @@ from studies.stimuli import (
 )
 
 try:
-    from studies.analysis.schema import STUDY_COLUMNS
+    from studies.analysis.schema import PILOT_SUFFIX, STUDY_COLUMNS
 except ImportError:  # the analysis package is not there: the columns it documents
+    PILOT_SUFFIX = "-pilot"
     _HEAD = ("participant_id", "session_id", "study", "list_id", "trial", "word")
     _TAIL = ("rt_ms", "is_attention_check", "attention_pass", "timestamp", "app_version", "seed")
     STUDY_COLUMNS = {
@@ -100,13 +110,15 @@ class BuildReport:
         The questionnaire can run (every word has its human writers, or stand-ins in a
         pilot build).
     pilot : bool
-        Stand-ins replaced missing human samples: try the pages, do not collect data.
+        A pilot build: try the pages, do not collect data (see the module docstring).
     missing : list of str
         What is missing before it can, one line each.
     notes : list of str
         Where counterbalancing is only near-exact; human samples left out, and why.
     n_stimuli : int
     app_version : str
+    stand_ins : int
+        Stand-in samples a pilot build made for the missing human ones.
     """
 
     out_dir: Path
@@ -116,6 +128,29 @@ class BuildReport:
     notes: list[str] = field(default_factory=list)
     n_stimuli: int = 0
     app_version: str = ""
+    stand_ins: int = 0
+
+
+def default_out(name: str, pilot: bool = False) -> Path:
+    """Where ``prg-study build`` writes a study by default: ``studies/<name>/build``, or
+    ``studies/<name>/pilot`` for a pilot build (never over the real one)."""
+    return Path("studies") / name / ("pilot" if pilot else "build")
+
+
+def pilot_banner(stand_ins: int, page: str = "study") -> str:
+    """What the PILOT banner says after "PILOT \u2014" on ``page`` (``study`` or ``capture``)
+    of a pilot build."""
+    if page == "capture":
+        return (
+            "this capture page belongs to a pilot build: record the study's writers with the "
+            "capture page of the study's own build."
+        )
+    what = (
+        "the human samples here are stand-ins made from the robot's writing"
+        if stand_ins
+        else "a trial run of the study pages"
+    )
+    return f"{what}. For trying the pages only: do not collect data."
 
 
 def web_asset(name: str) -> bytes:
@@ -123,15 +158,24 @@ def web_asset(name: str) -> bytes:
     return resources.files("studies").joinpath("web", name).read_bytes()
 
 
-def page_html(page: str) -> bytes:
+def page_html(page: str, banner: str | None = None) -> bytes:
     """The ``index.html`` of ``page`` (``study`` or ``capture``): the skeleton with its title,
-    viewport, stylesheet and scripts (the data scripts first, then ``common.js``, then its own)."""
+    viewport, stylesheet and scripts (the data scripts first, then ``common.js``, then its own);
+    with a ``banner`` (a pilot build's: what follows "PILOT —"), the banner above every screen
+    and "PILOT" in the title."""
     fields = PAGES[page]
     data = "".join(f'<script src="{name}"></script>\n' for name in fields["data"])
     skeleton = string.Template(web_asset("page.html").decode("utf-8"))
+    top = (
+        '<div class="pilot-banner" id="pilot-banner" role="note"><strong class="pilot-tag">'
+        f"PILOT</strong> \u2014 {html.escape(banner)}</div>\n"
+        if banner
+        else ""
+    )
     return skeleton.substitute(
         page=page,
-        title=fields["title"],
+        banner=top,
+        title=("PILOT \u2014 " if banner else "") + fields["title"],
         viewport=fields["viewport"],
         noun=fields["noun"],
         data=data,
@@ -255,13 +299,13 @@ def build_study(
         Checkpoint for writing the robot's words (default: the config's ``robot.ckpt``, else
         ``models/<robot.family>/model.ckpt``).
     out_dir : path, optional
-        Default ``studies/<name>/build`` (relative to the working directory).
+        Default :func:`default_out` (relative to the working directory).
     progress : callable, optional
         Called with one line per step.
     pilot : bool
-        Fill missing human samples with stand-ins made from the robot's
-        (:func:`studies.stimuli.stand_ins`) so the pages can be tried before the human writers
-        have written; the page shows a "pilot" banner and ``app_version`` ends in ``-pilot``.
+        A pilot build (see the module docstring): missing human samples are filled with
+        stand-ins made from the robot's (:func:`studies.stimuli.stand_ins`) so the pages can be
+        tried before the human writers have written; default folder ``studies/<name>/pilot``.
 
     Returns
     -------
@@ -270,13 +314,26 @@ def build_study(
     Raises
     ------
     UsageError
-        A folder or file that cannot be read, a bad render setting, a missing checkpoint.
+        A folder or file that cannot be read, a bad render setting, a missing checkpoint; a
+        pilot build into a folder that holds a study's own build.
     """
     say = progress or (lambda line: None)
     style = RenderStyle.from_dict(config.render)
-    out = Path(out_dir) if out_dir is not None else Path("studies") / config.name / "build"
+    out = Path(out_dir) if out_dir is not None else default_out(config.name, pilot)
+    if pilot and _holds_a_study_build(out):
+        raise UsageError(
+            f"--out {out}: holds a study's own build (its manifest.json says pilot: false); "
+            f"a pilot build goes to a folder of its own, e.g. the default "
+            f"{default_out(config.name, pilot=True)}"
+        )
+    # a real build in its default folder points its not-ready page at the pilot copy beside it
+    pilot_copy = None
+    if not pilot and out.resolve() == default_out(config.name).resolve():
+        pilot_copy = "../pilot/index.html"
     with staged_folder(out) as staging:
-        report = _build_into(staging, config, style, human_dirs, robot_dir, ckpt, say, pilot)
+        report = _build_into(
+            staging, config, style, human_dirs, robot_dir, ckpt, say, pilot, pilot_copy
+        )
     report.out_dir = out
     return report
 
@@ -290,6 +347,7 @@ def _build_into(
     ckpt: str | Path | None,
     say: Callable[[str], None],
     pilot: bool,
+    pilot_copy: str | None,
 ) -> BuildReport:
     # human samples first: a bad folder or file fails before the model runs
     dirs = [*(config.human.get("dirs") or []), *human_dirs]
@@ -335,13 +393,14 @@ def _build_into(
             f"{config.human_writers} human writers; record them with capture/index.html and "
             "rebuild with --human DIR (or list the folders in human.dirs)"
         ]
-    pilot = pilot and bool(missing)
+    n_stand_ins = 0
     if pilot:  # stand-ins for the missing writers
         for word in config.words:
             short = max(0, config.human_writers - len(writers[word]))
             for sample in stand_ins(robot[word], short, config.seed, delayed_strokes=delayed):
                 humans.by_word[word][sample.writer_id] = sample
                 writers[word].append(sample.writer_id)
+                n_stand_ins += 1
     ready = pilot or not missing
 
     # stimuli: every sample the design may show, drawn alike, under opaque names
@@ -370,17 +429,20 @@ def _build_into(
     (root / "trials.csv").write_text(trial_table(rows, files), encoding="utf-8")
 
     # pages
-    assets = {"index.html": page_html("study")}
+    banners = {page: pilot_banner(n_stand_ins, page) if pilot else None for page in PAGES}
+    assets = {"index.html": page_html("study", banners["study"])}
     assets |= {dst: web_asset(src) for src, dst in STUDY_ASSETS.items()}
-    capture_assets = {"index.html": page_html("capture")}
+    capture_assets = {"index.html": page_html("capture", banners["capture"])}
     capture_assets |= {dst: web_asset(src) for src, dst in CAPTURE_ASSETS.items()}
     digest = _hash(
         json.dumps(trials, sort_keys=True).encode(),
-        json.dumps(_page_config(config, "", ready, missing, pilot), sort_keys=True).encode(),
+        json.dumps(
+            _page_config(config, "", ready, missing, pilot, pilot_copy), sort_keys=True
+        ).encode(),
         *assets.values(),
     )
-    app_version = f"{prg.__version__}+{digest[:10]}" + ("-pilot" if pilot else "")
-    page = _page_config(config, app_version, ready, missing, pilot)
+    app_version = f"{prg.__version__}+{digest[:10]}" + (PILOT_SUFFIX if pilot else "")
+    page = _page_config(config, app_version, ready, missing, pilot, pilot_copy)
     for name, data in assets.items():
         (root / name).write_bytes(data)
     (root / "config.js").write_text(js_assignment("PRG_STUDY_CONFIG", page), encoding="utf-8")
@@ -401,12 +463,13 @@ def _build_into(
         "canvas_width": int(config.capture["canvas_width"]),
         "canvas_height": int(config.capture["canvas_height"]),
         "app_version": app_version,
+        "pilot": pilot,
     }
     (capture / "config.js").write_text(
         js_assignment("PRG_CAPTURE_CONFIG", capture_cfg), encoding="utf-8"
     )
     notes = [*balance_notes(config), *robot_notes, *humans.notes]
-    report = BuildReport(root, ready, pilot, missing, notes, len(samples), app_version)
+    report = BuildReport(root, ready, pilot, missing, notes, len(samples), app_version, n_stand_ins)
     _write_json(
         root / "manifest.json",
         {
@@ -418,6 +481,7 @@ def _build_into(
             "delayed_strokes": delayed,
             "ready": ready,
             "pilot": pilot,
+            "stand_ins": n_stand_ins,
             "missing": missing,
             "notes": notes,
             "words": list(config.words),
@@ -432,11 +496,27 @@ def _build_into(
     return report
 
 
+def _holds_a_study_build(folder: Path) -> bool:
+    """``folder`` holds a build that is not a pilot (by its ``manifest.json``)."""
+    try:
+        manifest = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return isinstance(manifest, dict) and manifest.get("pilot") is False
+
+
 def _page_config(
-    config: StudySettings, app_version: str, ready: bool, missing: list[str], pilot: bool
+    config: StudySettings,
+    app_version: str,
+    ready: bool,
+    missing: list[str],
+    pilot: bool,
+    pilot_copy: str | None,
 ) -> dict:
     code = config.completion["code"]
     url = config.completion["url"]
+    if pilot:  # a pilot's answers and code never pass for the study's
+        code = f"PILOT-{code}"
     return {
         "name": config.name,
         "kind": config.kind,
@@ -451,6 +531,7 @@ def _page_config(
         "app_version": app_version,
         "ready": ready,
         "pilot": pilot,
+        "pilot_copy": pilot_copy,
         "missing": missing,
         "completion": {
             "code": code,
@@ -458,8 +539,8 @@ def _page_config(
             "redirect_delay_ms": int(config.completion["redirect_delay_ms"]),
         },
         "save": {
-            "download": bool(config.save["download"]),
-            "post_url": config.save["post_url"],
+            "download": bool(config.save["download"]) or pilot,
+            "post_url": None if pilot else config.save["post_url"],
         },
     }
 
@@ -470,11 +551,20 @@ def _write_json(path: Path, obj) -> None:
 
 def _readme(config: StudySettings, page: dict) -> str:
     if page["pilot"]:
-        status = "PILOT (stand-ins replace the missing human samples: try it, collect no data)"
+        status = (
+            "PILOT (stand-ins replace the missing human samples: try it, collect no data; "
+            "its answers are marked pilot, never POSTed, and its completion code starts with "
+            "PILOT-)"
+        )
     elif page["ready"]:
         status = "ready to run"
     else:
         status = "NOT READY:\n\n" + "\n".join(f"- {m}" for m in page["missing"])
+        status += (
+            "\n\nTo try the pages before then: `prg-study build <study file> --pilot` builds a "
+            "PILOT copy with stand-ins for the human samples (default folder "
+            f"`{default_out(config.name, pilot=True)}/`; never for data)."
+        )
     post = page["save"]["post_url"]
     if config.delayed_strokes:
         handwriting = (

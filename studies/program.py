@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Callable, Sequence
-from pathlib import Path
 from typing import NoReturn
 
 from prg.commands.cli import check_output, handle_signals, os_error_message
@@ -36,11 +35,11 @@ def _say(line: str) -> None:
 
 def build_command(args: argparse.Namespace) -> int:
     """``prg-study build``: see :func:`studies.bundle.build_study`."""
-    from studies.bundle import build_study
+    from studies.bundle import build_study, default_out
     from studies.design_config import load_study
 
     config = load_study(args.config, args.set or [])
-    out = check_output(args.out or Path("studies") / config.name / "build", "--out")
+    out = check_output(args.out or default_out(config.name, args.pilot), "--out")
     report = build_study(
         config,
         human_dirs=args.human or [],
@@ -53,9 +52,14 @@ def build_command(args: argparse.Namespace) -> int:
     for note in report.notes:
         _say(f"note: {note}")
     if report.pilot:
+        made = (
+            f"{report.stand_ins} stand-ins for the missing human samples"
+            if report.stand_ins
+            else "the human samples"
+        )
         _say(
-            f"{config.name}: PILOT build — {report.out_dir}/index.html runs with stand-ins for "
-            "the missing human samples; do not collect data with it"
+            f"{config.name}: PILOT build — {report.out_dir}/index.html runs with {made}; try "
+            "the pages, do not collect data with it (answers marked pilot, never POSTed)"
         )
         for line in report.missing:
             _say(f"stand-ins for: {line}")
@@ -69,6 +73,10 @@ def build_command(args: argparse.Namespace) -> int:
     _say(f"{config.name}: NOT READY — built the robot stimuli and {report.out_dir}/capture/")
     for line in report.missing:
         _say(f"missing: {line}")
+    _say(
+        f"to try the pages now: prg-study build {args.config} --pilot "
+        f"(a PILOT copy with stand-ins, in {default_out(config.name, pilot=True)}/ by default)"
+    )
     if args.require_ready:
         raise UsageError(f"{config.name} is not ready: {len(report.missing)} missing item(s)")
     return 0
@@ -97,7 +105,11 @@ def _add_build(subparsers) -> None:
         "writing the words with the model",
     )
     p.add_argument("--ckpt", metavar="PATH", help="model checkpoint for the robot's words")
-    p.add_argument("--out", metavar="DIR", help="output folder (default studies/<name>/build)")
+    p.add_argument(
+        "--out",
+        metavar="DIR",
+        help="output folder (default studies/<name>/build, with --pilot studies/<name>/pilot)",
+    )
     p.add_argument(
         "--set",
         action="append",
@@ -112,8 +124,9 @@ def _add_build(subparsers) -> None:
     p.add_argument(
         "--pilot",
         action="store_true",
-        help="fill missing human samples with stand-ins made from the robot's, to try the "
-        "pages before the human writers have written (marked pilot; not for data)",
+        help="a pilot copy (default folder studies/<name>/pilot): missing human samples are "
+        "filled with stand-ins made from the robot's, to try the pages before the human "
+        "writers have written; every page says PILOT, answers are marked pilot, never POSTed",
     )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=build_command)

@@ -61,9 +61,12 @@ def small_dataset(tmp_path_factory) -> Path:
 
 
 def run_cli(*args: str, cwd: Path | None = None, env: dict | None = None, timeout: int = 300):
-    """Run a console script of this environment; returns the CompletedProcess."""
+    """Run a console script of this environment; returns the CompletedProcess. Run in ``cwd``,
+    the command's project root is ``cwd`` unless ``env`` sets ``PRG_ROOT`` (a test's command
+    never writes logs or runs into the checkout's own folders)."""
     command = [str(BIN / args[0]), *args[1:]]
-    full_env = {**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})}
+    root = {"PRG_ROOT": str(cwd)} if cwd is not None else {}
+    full_env = {**os.environ, "PYTHONUNBUFFERED": "1", **root, **(env or {})}
     return subprocess.run(
         command, cwd=cwd, env=full_env, capture_output=True, text=True, timeout=timeout
     )

@@ -398,6 +398,67 @@ CASES = [
     ),
     case("write-mark-twice", "prg-write", "text=hi marks.dotted=it", 2, "'t' is also dotted"),
     case("write-zero-dot", "prg-write", "text=hi marks.dot_radius=0", 2, "marks.dot_radius"),
+    # unknown keys and choices, answered from the composed command line (prg.commands.cli)
+    case(
+        "write-unknown-key",
+        "prg-write",
+        "txt=hello",
+        2,
+        "unknown key txt (closest: text); accepted top-level keys: text, ",
+    ),
+    case(
+        "write-unknown-family",
+        "prg-write",
+        "text=hi family=musee",
+        2,
+        "unknown family musee; accepted: cvae, avae_ts, avae_ti, muse",
+    ),
+    case(
+        "write-top-level-temperature",
+        "prg-write",
+        "text=hi temperature=-1",
+        2,
+        "unknown key temperature (closest: generate.temperature",
+    ),
+    case(
+        "write-misspelt-nested-key",
+        "prg-write",
+        "text=hi generate.temprature=0.5",
+        2,
+        "(closest: generate.temperature); accepted under generate: temperature, seed",
+    ),
+    case(
+        "write-key-below-a-value",
+        "prg-write",
+        "text=hi speech.lexicon.cat=1",
+        2,
+        "unknown key speech.lexicon.cat",
+    ),
+    case(
+        "write-no-model",
+        "prg-write",
+        "text=hi ckpt=null models_dir={tmp}/nomodels",
+        2,
+        "nomodels/muse/model.ckpt does not exist: no muse model under models_dir (project root",
+    ),
+    case(
+        "write-no-ckpt-file", "prg-write", "text=hi ckpt=none.ckpt", 2, "/none.ckpt does not exist"
+    ),
+    case("train-unknown-model", "prg-train", "model=musee", 2, "unknown model musee; accepted:"),
+    case("train-unknown-key", "prg-train", "seeed=3", 2, "unknown key seeed (closest: seed"),
+    case(
+        "evaluate-unknown-family",
+        "prg-evaluate",
+        "families=[muse,avae]",
+        2,
+        "unknown family avae in families=['muse', 'avae']; accepted: cvae, avae_ts",
+    ),
+    case("dictaphone-unknown-family", "prg-dictaphone", "family=vae", 2, "unknown family vae"),
+    case("simulate-unknown-key", "prg-simulate", "word={word} robt=iiwa", 2, "closest: robot"),
+    case(
+        "prepare-unknown-key", "prg-prepare", "worker=3", 2, "unknown key worker (closest: workers"
+    ),
+    case("export-unknown-key", "prg-export", "word={word} format=[svg]", 2, "closest: formats"),
     # ---- prg-export
     case("export-no-word", "prg-export", [], 2, "give word=WORD.json"),
     case("export-unknown-format", "prg-export", "word={word} formats=[dxf]", 2, "dxf"),

@@ -94,6 +94,7 @@ def test_prg_write_refuses_a_hostile_checkpoint_in_one_line_and_creates_nothing(
             f"out_dir={tmp_path}/o",
         ],
         cwd=tmp_path,
+        env={**os.environ, "PRG_ROOT": str(tmp_path)},  # logs there, not in the checkout
         capture_output=True,
         text=True,
         timeout=120,

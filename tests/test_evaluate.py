@@ -182,7 +182,7 @@ def test_reports_tables_figures_and_mlflow(trained_root, small_dataset):
     logged = client.get_run(run_id).data.metrics
     assert logged["test/logp_T_given_S"] == pytest.approx(metrics["muse/logp_T_given_S"])
     assert logged["test/coherence_T_given_S"] == pytest.approx(metrics["muse/coherence_T_given_S"])
-    experiment = client.get_experiment_by_name("prg").experiment_id
+    experiment = client.get_experiment_by_name("prg-tasks").experiment_id  # task runs apart
     (run,) = client.search_runs([experiment], "tags.`prg.task` = 'evaluate'")
     artifacts = {a.path for a in client.list_artifacts(run.info.run_id, "reports")}
     assert {"reports/table1.md", "reports/coherence.csv", "reports/robustness.md"} <= artifacts

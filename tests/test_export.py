@@ -519,3 +519,17 @@ def test_prg_export_writes_every_format_and_refuses_bad_input_writing_nothing(wo
     assert too_big.returncode == 2 and too_big.stderr.count("\n") == 1
     assert "does not fit" in too_big.stderr
     assert not fresh.exists()
+
+
+def test_prg_export_puts_each_word_in_a_new_folder_by_default(word, tmp_path):
+    source = word.to_json(tmp_path / "hi.json")
+    runs = [
+        run_cli("prg-export", f"word={source}", f"paths.root_dir={tmp_path}", "formats=[svg]")
+        for _ in range(2)
+    ]
+    assert all(r.returncode == 0 for r in runs), runs[-1].stderr
+    folders = sorted((tmp_path / "outputs/export").iterdir())
+    assert len(folders) == 2  # the second run did not overwrite the first
+    for folder in folders:
+        assert re.fullmatch(r"h_i-\d{8}-\d{6}(-2)?", folder.name), folder.name
+        assert {p.name for p in folder.iterdir()} == {"word.svg", "export.json"}

@@ -49,7 +49,7 @@ def _run(cwd: Path, *args: str, timeout: int = 300) -> subprocess.CompletedProce
     return subprocess.run(
         [sys.executable, "-m", "prg.commands.paper_scale", *args],
         cwd=cwd,
-        env={**env, "PYTHONUNBUFFERED": "1"},
+        env={**env, "PYTHONUNBUFFERED": "1", "PRG_ROOT": str(cwd)},  # its store: cwd's
         capture_output=True,
         text=True,
         timeout=timeout,
@@ -112,11 +112,13 @@ def test_trains_four_families_concurrently_then_evaluates_into_its_own_folder(
     assert f"Timings:    {reports.relative_to(tmp_path) / 'paper_scale.json'}" in out
 
     client = MlflowClient(sqlite_uri(tmp_path / "mlruns.db"))
-    experiment = client.get_experiment_by_name("prg-paper")
-    runs = client.search_runs([experiment.experiment_id])
+    training, tasks = (client.get_experiment_by_name(n) for n in ("prg-paper", "prg-paper-tasks"))
+    runs = client.search_runs([training.experiment_id, tasks.experiment_id])
     assert sorted(r.info.run_name for r in runs) == sorted(
         [f"{f}-seed0" for f in paper_scale.FAMILIES] + ["paper-evaluate"]
     )
+    (evaluate,) = client.search_runs([tasks.experiment_id])  # task runs in their own experiment
+    assert evaluate.info.run_name == "paper-evaluate"
     assert all(r.info.status == "FINISHED" for r in runs)
     assert all(r.data.tags.get("prg.experiment") == "paper" for r in runs)
 
@@ -240,7 +242,12 @@ def test_the_converged_profile_trains_the_fast_recipe_into_its_own_folder(tmp_pa
     coherence = list(csv.DictReader((root / "reports/coherence.csv").open()))
     assert {int(r["n"]) for r in coherence} == {n_test}  # ... coherence on all of them
     client = MlflowClient(sqlite_uri(tmp_path / "mlruns.db"))
-    runs = client.search_runs([client.get_experiment_by_name("prg-converged").experiment_id])
+    runs = client.search_runs(
+        [
+            client.get_experiment_by_name(n).experiment_id
+            for n in ("prg-converged", "prg-converged-tasks")
+        ]
+    )
     assert sorted(r.info.run_name for r in runs) == [
         "converged-evaluate",
         "cvae-seed0",

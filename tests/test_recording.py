@@ -22,6 +22,7 @@ from prg.recording import (
     read_component,
     read_entities,
     read_times,
+    read_views,
     record_write,
     recording_stream,
     recording_summary,
@@ -163,6 +164,32 @@ def test_the_file_is_renamed_into_place_and_carries_a_blueprint(written):
     assert len(RrdReader(written["path"]).blueprints()) == 1
 
 
+def _inside(bounds: dict, points: np.ndarray) -> bool:
+    """Every point strictly inside 2D view bounds (``VisualBounds2D:range``)."""
+    (x0, x1), (y0, y1) = bounds["x_range"], bounds["y_range"]
+    x, y = np.asarray(points).reshape(-1, 2).T
+    return bool(x0 < x.min() and x.max() < x1 and y0 < y.min() and y.max() < y1)
+
+
+def test_the_word_and_every_decoded_letter_open_whole_in_their_views(written):
+    """The stored blueprint bounds the word view around the word and the letter strip around
+    every letter where the recording places it (its strip moved by its transform)."""
+    path = written["path"]
+    views = read_views(path)
+    assert _inside(views["Word: ab cd"]["VisualBounds2D:range"], written["word"].points * FLIP)
+    strip = views["Decoded letters"]["VisualBounds2D:range"]
+    shown = []
+    for name in LETTERS:
+        ((points,),) = read_component(path, f"decoded/{name}", "LineStrips2D:strips")
+        ((shift,),) = read_component(path, f"decoded/{name}", "Transform3D:translation")
+        shown.append(np.asarray(points) + shift[:2])
+        assert _inside(strip, shown[-1]), name
+    (x0, x1), _ = strip["x_range"], strip["y_range"]
+    first, last = shown[0][:, 0].min(), shown[-1][:, 0].max()
+    assert x0 < first - 0.05 * (last - first) and x1 > last + 0.05 * (last - first)  # a margin
+    assert views["Waveform"]["PlotLegend:visible"] is False  # its min/max key hid the curve
+
+
 def test_rerun_itself_verifies_the_file(written, tmp_path):
     """The viewer's own loader (``rerun rrd verify``) reads every chunk of the recording."""
     env = {
@@ -273,3 +300,35 @@ def test_framing_bounds_hold_every_point_with_a_margin():
         assert y0 < pts[:, 1].min() and y1 > pts[:, 1].max()
         pad = 0.1 * max(np.ptp(pts, axis=0).max(), 1.0)
         assert np.isclose(x0, pts[:, 0].min() - pad) and np.isclose(y1, pts[:, 1].max() + pad)
+
+
+def test_the_3d_eye_holds_every_point_and_is_no_farther_than_it_must_be():
+    from prg.recording import framing_eye
+
+    rng = np.random.default_rng(1)
+    edge = np.tan(np.radians(55.0) / 2)  # Rerun's vertical field of view
+    for aspect in (1.0, 1.6):
+        for _ in range(5):
+            pts = rng.normal(size=(40, 3)) * rng.uniform(0.01, 1.0, size=3) + rng.normal(size=3)
+            looking_from = rng.normal(size=3) + np.array([0.0, 0.0, 2.0])
+            eye = framing_eye(pts, looking_from, margin=0.1, aspect=aspect)
+            (position,) = eye.position.as_arrow_array().to_pylist()
+            (target,) = eye.look_target.as_arrow_array().to_pylist()
+            forward = np.subtract(target, position)
+            forward /= np.linalg.norm(forward)
+            np.testing.assert_allclose(
+                forward, -looking_from / np.linalg.norm(looking_from), atol=FLOAT32
+            )
+            right = np.cross(forward, [0.0, 0.0, 1.0])
+            right /= np.linalg.norm(right)
+            up = np.cross(right, forward)
+            rel = pts - position
+            depth = rel @ forward
+            # the share of the picture (inside the margin) the farthest point out takes
+            taken = max(
+                (np.abs(rel @ right) / depth).max() / (edge * aspect / 1.1),
+                (np.abs(rel @ up) / depth).max() / (edge / 1.1),
+            )
+            assert depth.min() > 0 and taken <= 1 + FLOAT32
+            # tight: a point touches the margin, unless the eye keeps its least distance
+            assert taken > 1 - FLOAT32 or depth.min() == pytest.approx(0.035, rel=FLOAT32)

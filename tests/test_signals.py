@@ -95,7 +95,7 @@ def signal_command(
 ) -> tuple[int, str, set[int]]:
     """Start ``argv``, wait for its handler and ``ready(pid)``, send ``sig``; returns the exit
     code, stderr and the processes below it that still run 10 s after it ended."""
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    env = {**os.environ, "PYTHONUNBUFFERED": "1", "PRG_ROOT": str(cwd)}
     proc = subprocess.Popen(
         argv, cwd=cwd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
     )

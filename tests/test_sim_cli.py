@@ -9,9 +9,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import rerun.blueprint as rrb
 from mlflow import MlflowClient
 
-from prg.recording import read_entities
+from prg.recording import read_component, read_entities, read_times, read_views
 from prg.sim import font_word
 from prg.tracking import sqlite_uri
 from tests.conftest import BIN, run_cli
@@ -40,12 +41,23 @@ def word_json(tmp_path_factory) -> Path:
     return font_word("ok").to_json(tmp_path_factory.mktemp("word") / "word.json")
 
 
-def test_simulates_a_word_json_into_every_output_and_an_mlflow_run(tmp_path, word_json):
-    out = tmp_path / "out"
-    result = simulate_cli(
-        f"word={word_json}", f"out_dir={out}", f"paths.root_dir={tmp_path}", "robot=iiwa"
-    )
+@pytest.fixture(scope="module")
+def iiwa_run(tmp_path_factory, word_json) -> Path:
+    """``prg-simulate word=ok.json robot=iiwa`` into its default folder; the root it ran in."""
+    root = tmp_path_factory.mktemp("iiwa")
+    result = simulate_cli(f"word={word_json}", f"paths.root_dir={root}", "robot=iiwa")
     assert result.returncode == 0, result.stderr[-2000:]
+    return root
+
+
+def _iiwa_folder(root: Path) -> Path:
+    (folder,) = (root / "outputs" / "simulate" / "iiwa").iterdir()
+    return folder
+
+
+def test_simulates_a_word_json_into_every_output_and_an_mlflow_run(iiwa_run, word_json):
+    out = _iiwa_folder(iiwa_run)
+    assert re.fullmatch(r"ok-\d{8}-\d{6}", out.name), out.name  # <text>-<YYYYmmdd-HHMMSS>
     assert {p.name for p in out.iterdir()} == OUTPUTS
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["robot"] == "iiwa" and metrics["text"] == "ok"
@@ -60,9 +72,9 @@ def test_simulates_a_word_json_into_every_output_and_an_mlflow_run(tmp_path, wor
     assert header[0] == "t_s" and header[1] == "lbr_iiwa_joint_1" and header[-1] == "ink"
     assert "world/lbr_iiwa/joints/lbr_iiwa_joint_7" in read_entities(out / "sim.rrd")
 
-    client = MlflowClient(sqlite_uri(tmp_path / "mlruns.db"))
+    client = MlflowClient(sqlite_uri(iiwa_run / "mlruns.db"))
     (run,) = client.search_runs(
-        [client.get_experiment_by_name("prg").experiment_id], "tags.`prg.task` = 'simulate'"
+        [client.get_experiment_by_name("prg-tasks").experiment_id], "tags.`prg.task` = 'simulate'"
     )
     assert run.data.tags["prg.robot"] == "iiwa"
     assert run.data.metrics["simulate/tracking_error_mean_mm"] == pytest.approx(
@@ -102,6 +114,71 @@ def test_text_runs_prg_write_first_with_its_options(tmp_path, untrained_muse_che
     assert metrics["text"] == "a"
     assert metrics["word_height_cm"] <= 2.0 + 1e-6
     assert metrics["tracking_error_mean_mm"] < 0.5
+
+
+RERUN_FOV_Y = np.radians(55.0)  # Rerun's 3D eye: its vertical field of view
+
+
+def _picture(view: dict, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where ``points`` (world) appear in a 3D view's eye: tangents across and up (the edge of
+    the picture is at tan(fov/2) up and down); every point must lie in front of the eye."""
+    position = np.array(view["EyeControls3D:position"])
+    forward = np.array(view["EyeControls3D:look_target"]) - position
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, view["EyeControls3D:eye_up"])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    rel = np.asarray(points) - position
+    depth = rel @ forward
+    assert np.all(depth > 0)
+    return rel @ right / depth, rel @ up / depth
+
+
+def test_the_views_open_on_the_arm_the_page_the_word_and_a_clear_joint_plot(iiwa_run):
+    """The stored blueprint frames what the recording holds: the robot view the arm's base, its
+    pen's whole path and the page's corners; the close-up the ink, large; the page view the ink;
+    the joint plot's legend beside the curves, not over them."""
+    from scipy.spatial.transform import Rotation
+
+    from prg.recording.simulation import VIEW_ASPECT
+
+    out = _iiwa_folder(iiwa_run)
+    rrd = out / "sim.rrd"
+    views = read_views(rrd)
+    data = np.load(out / "joints.npz")
+    ink_world = data["tip_world"][data["contact"]]
+    ((centre,),) = read_component(rrd, "world/paper", "Boxes3D:centers")
+    ((half,),) = read_component(rrd, "world/paper", "Boxes3D:half_sizes")
+    ((quaternion,),) = read_component(rrd, "world/paper", "Boxes3D:quaternions")
+    corners = np.array([[sx, sy, 1] for sx in (-1, 1) for sy in (-1, 1)]) * half
+    page = Rotation.from_quat(quaternion).apply(corners) + centre
+    ((base,),) = read_component(rrd, "world/lbr_iiwa/base", "Transform3D:translation")
+
+    edge = np.tan(RERUN_FOV_Y / 2)
+    robot = views["iiwa writes 'ok'"]
+    across, up = _picture(robot, np.vstack([page, [base], data["tip_world"]]))
+    assert np.abs(across).max() <= edge * VIEW_ASPECT and np.abs(up).max() <= edge
+    assert np.ptp(up) > edge / 2  # not lost in the distance: over a quarter of the picture
+
+    close_up = views["Pen on the page"]
+    across, up = _picture(close_up, ink_world)
+    assert np.abs(across).max() <= edge * VIEW_ASPECT and np.abs(up).max() <= edge
+    assert max(np.ptp(across) / VIEW_ASPECT, np.ptp(up)) > edge / 2  # over a quarter of it
+    word_in_robot_view = np.ptp(_picture(robot, ink_world)[0])
+    assert np.ptp(across) > 10 * word_in_robot_view
+
+    bounds = views["Ink on the page (cm)"]["VisualBounds2D:range"]
+    ink_page = data["tip_paper"][data["contact"], :2] * [1, -1]  # logged y-flipped
+    (x0, x1), (y0, y1) = bounds["x_range"], bounds["y_range"]
+    assert x0 < ink_page[:, 0].min() and ink_page[:, 0].max() < x1
+    assert y0 < ink_page[:, 1].min() and ink_page[:, 1].max() < y1
+
+    joints = views["Joint angles (rad)"]
+    assert joints["PlotLegend:visible"] is True
+    assert joints["PlotLegend:corner"] == rrb.Corner2D.RightTop.value
+    last = read_times(rrd, f"joints/{data['joint_names'][0]}", "sim_time")[-1]
+    shown = joints["TimeAxis:view_range"]
+    assert shown["start"] == 0 and shown["end"] / 1e9 > 1.25 * last  # room right of the curves
 
 
 @pytest.mark.parametrize(

@@ -8,6 +8,7 @@ copy, the redirect to Prolific, the capture JSON — and that JSON fed back as h
 
 from __future__ import annotations
 
+import csv
 import json
 import math
 import subprocess
@@ -18,7 +19,7 @@ from urllib.parse import parse_qs, urlparse
 import pytest
 
 from studies.analysis.schema import STUDY1_COLUMNS, STUDY2_COLUMNS
-from studies.analysis.validate import load_responses
+from studies.analysis.validate import ResponseFileError, load_responses
 from studies.bundle import response_columns
 from studies.cli import main
 from studies.design import assign_row, fnv1a32
@@ -579,25 +580,107 @@ def test_without_human_samples_the_build_says_what_is_missing(page, tmp_path, sa
     assert "human writers" in page.text_content("main ul")
 
 
-def test_a_pilot_build_runs_with_stand_ins_and_says_so(page, tmp_path, samples, capsys):
+def test_a_pilot_build_runs_with_stand_ins_and_is_marked_pilot_everywhere(
+    page, tmp_path, samples, capsys
+):
+    posted = []
+    page.route(COLLECT, lambda route: (posted.append(route.request), route.fulfill(body="ok")))
     out = tmp_path / "pilot"
     args = ["build", str(REPO / "conf/study/readability.yaml"), "--out", str(out), "--pilot"]
     args += ["--robot", str(samples["robot"]), "--set", "words=[cat, dog]", "-q"]
+    args += ["--set", f"save.post_url={COLLECT}", "--set", "completion.redirect_delay_ms=1500"]
     assert main([*args, "--set", "participants=2", "--set", "attention_checks=[]"]) == 0
     assert "readability: PILOT build" in capsys.readouterr().err
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["ready"] is manifest["pilot"] is True
     assert manifest["app_version"].endswith("-pilot")
     assert manifest["human_writers"]["cat"] == [f"pilot{k:02d}" for k in range(1, 11)]
-    row = start(page, (out / "index.html").as_uri() + "?row=1")
-    assert "Pilot build" in page.text_content("#pilot-banner")
+    assert manifest["stand_ins"] == 2 * 10
+
+    def marked() -> None:  # the screen shown now says PILOT
+        assert page.title().startswith("PILOT")
+        assert page.is_visible("#pilot-banner")
+        assert "PILOT" in page.text_content("#pilot-banner")
+
+    page.goto((out / "index.html").as_uri() + "?row=1")
+    marked()  # consent
+    page.check("#consent-agree")
+    page.click("#consent-continue")
+    marked()  # instructions
+    page.click("#start:not([disabled])")
+    row = page.evaluate("PRGStudy.state.row")
     with page.expect_download() as download:
         for trial in row["trials"]:
+            marked()
             page.fill("#answer", trial["word"])
             page.click("#next")
-    _, rows = read_csv(Path(download.value.path()).read_text())
+    marked()  # the end
+    code = page.text_content("#completion-code")
+    assert code.startswith("PILOT-") and code != "PILOT-"
+    page.wait_for_url(PROLIFIC)
+    assert parse_qs(urlparse(page.url).query) == {"cc": [code]}
+    assert posted == []  # a pilot never sends its answers to the study's collector
+    assert download.value.suggested_filename.startswith("PILOT_readability_")
+    text = Path(download.value.path()).read_text()
+    _, rows = read_csv(text)
     assert [r["correct"] for r in rows] == ["true", "true"]
     assert {r["app_version"] for r in rows} == {manifest["app_version"]}
+
+    page.goto((out / "capture" / "index.html").as_uri())  # the capture page too
+    marked()
+
+    # the analysis never takes pilot rows together with a study's
+    columns, pilot_rows = read_csv(text)
+    study_rows = [
+        dict(r, participant_id="p1", app_version=r["app_version"].removesuffix("-pilot"))
+        for r in pilot_rows
+    ]
+    mixed = tmp_path / "mixed.csv"
+    with mixed.open("w", newline="") as fh:
+        writer = csv.DictWriter(fh, columns)
+        writer.writeheader()
+        writer.writerows(pilot_rows + study_rows)
+    with pytest.raises(ResponseFileError) as err:
+        load_responses(mixed)
+    assert (
+        "mixes 2 rows from the study's page (first on line 4) and 2 rows from a pilot build "
+        "(first on line 2): never analysed together" in str(err.value)
+    )
+    assert load_responses(download.value.path()).origin == "pilot"
+
+
+def test_the_not_ready_page_points_at_the_pilot_copy_beside_it(
+    page, tmp_path, samples, capsys, monkeypatch
+):
+    monkeypatch.chdir(tmp_path)  # the default folders: studies/readability/build and .../pilot
+    args = ["build", str(REPO / "conf/study/readability.yaml"), "--robot", str(samples["robot"])]
+    args += ["--set", "words=[cat, dog]", "--set", "participants=2", "-q"]
+    args += ["--set", "attention_checks=[]"]
+    assert main(args) == 0
+    err = capsys.readouterr().err
+    assert "readability: NOT READY" in err
+    assert (
+        f"to try the pages now: prg-study build {REPO / 'conf/study/readability.yaml'} --pilot"
+        in err
+    )
+    real = tmp_path / "studies" / "readability" / "build"
+    before = {p: p.read_bytes() for p in real.rglob("*") if p.is_file()}
+    assert main([*args, "--pilot"]) == 0
+    assert "readability: PILOT build" in capsys.readouterr().err
+    pilot = tmp_path / "studies" / "readability" / "pilot"
+    assert json.loads((pilot / "manifest.json").read_text())["pilot"] is True
+    assert main([*args, "--pilot", "--out", str(real)]) == 2  # never over the study's build
+    assert "holds a study's own build" in capsys.readouterr().err
+    assert {p: p.read_bytes() for p in real.rglob("*") if p.is_file()} == before  # untouched
+
+    page.goto((real / "index.html").as_uri())
+    assert "not ready" in page.text_content("#not-ready")
+    assert page.locator("#pilot-banner").count() == 0  # the real page is not a pilot
+    assert "PILOT copy" in page.text_content("#pilot-hint")
+    page.click("#pilot-copy")
+    assert page.url == (pilot / "index.html").as_uri()
+    assert "PILOT" in page.text_content("#pilot-banner")
+    assert page.is_visible("#consent-agree")  # it runs
 
 
 def test_some_human_samples_missing_is_an_error_on_request(tmp_path, samples, capsys):
@@ -704,3 +787,74 @@ def test_the_module_runs_as_a_command(tmp_path):
         result.stderr
         == "prg-study: error: missing.yaml: no such study file (e.g. conf/study/turing.yaml)\n"
     )
+
+
+# ---------------------------------------------------------------------------- layout
+SCREENS = {"laptop": (1280, 800), "phone": (390, 844)}
+
+
+@pytest.fixture(scope="module")
+def pilot_builds(tmp_path_factory) -> dict[str, Path]:
+    """Pilot builds of both shipped studies as they are (10 words, 5 samples a Turing trial, an
+    attention check): the PILOT banner takes room on every screen."""
+    from studies.design_config import load_study
+
+    root = tmp_path_factory.mktemp("pilots")
+    robot = robot_dir(root / "robot", load_study(REPO / TURING).words)
+    out = {}
+    for study in ("turing", "readability"):
+        out[study] = root / study
+        args = ["build", str(REPO / f"conf/study/{study}.yaml"), "--pilot", "-q"]
+        assert main([*args, "--robot", str(robot), "--out", str(out[study])]) == 0
+    return out
+
+
+def fit(page) -> dict:
+    """The document's scroll size, the window's size, and each sample's box and drawn size."""
+    return page.evaluate(
+        """() => ({
+        scroll: [document.documentElement.scrollWidth, document.documentElement.scrollHeight],
+        window: [window.innerWidth, window.innerHeight],
+        images: Array.from(document.querySelectorAll('main img')).map(img => {
+            const box = img.getBoundingClientRect();
+            const scale = Math.min(box.width / img.naturalWidth, box.height / img.naturalHeight);
+            return {left: box.left, right: box.right, top: box.top, bottom: box.bottom,
+                    drawn: [img.naturalWidth * scale, img.naturalHeight * scale]};
+        }),
+    })"""
+    )
+
+
+@pytest.mark.parametrize("screen", SCREENS)
+@pytest.mark.parametrize("study", ["turing", "readability"])
+def test_every_trial_fits_a_laptop_screen_and_a_phones_width(chromium, pilot_builds, study, screen):
+    width, height = SCREENS[screen]
+    context = chromium.new_context(viewport={"width": width, "height": height})
+    page = context.new_page()
+    row = start(page, (pilot_builds[study] / "index.html").as_uri() + "?row=3")
+    assert any(t["is_attention_check"] for t in row["trials"])  # the longest screen is measured
+    for i in range(len(row["trials"])):
+        m = fit(page)
+        where = f"{screen} {width}x{height}, trial {i + 1}"
+        assert m["window"] == [width, height]
+        assert m["scroll"][0] <= width, f"{where}: the page scrolls sideways ({m['scroll']})"
+        if screen == "laptop":
+            assert m["scroll"][1] <= height, f"{where}: the page scrolls down ({m['scroll']})"
+        samples = m["images"]
+        assert len(samples) == (5 if study == "turing" else 1)
+        for box in samples:
+            assert box["left"] >= 0 and box["right"] <= width, f"{where}: a sample overflows"
+            if screen == "laptop":  # whole on the screen, and big enough to read
+                assert box["top"] >= 0 and box["bottom"] <= height, f"{where}: a sample is cut"
+                assert box["drawn"][1] >= 100, f"{where}: a sample drawn {box['drawn']}"
+            else:
+                assert box["drawn"][0] >= 250, f"{where}: a sample drawn {box['drawn']}"
+        if study == "turing":
+            page.click("[data-option='1']")
+            page.click("[data-confidence='3']")
+            page.click("#next")
+        else:
+            page.fill("#answer", "blue")
+            page.press("#answer", "Enter")
+    assert page.is_visible("#completion-code")
+    context.close()

@@ -18,6 +18,7 @@ def cfg(tmp_path):
             "paths": {"root_dir": str(tmp_path)},
             "logger": {
                 "experiment_name": "prg-tests",
+                "task_experiment_name": "prg-tests-tasks",
                 "tracking_uri": sqlite_uri(tmp_path / "mlruns.db"),
                 "artifact_location": str(tmp_path / "mlartifacts"),
             },
@@ -27,7 +28,7 @@ def cfg(tmp_path):
 
 def _runs(cfg):
     client = mlflow_client(cfg.logger.tracking_uri)
-    experiment = client.get_experiment_by_name(cfg.logger.experiment_name)
+    experiment = client.get_experiment_by_name(cfg.logger.task_experiment_name)
     return client.search_runs([experiment.experiment_id])
 
 
@@ -42,10 +43,17 @@ def test_a_completed_task_is_finished_with_its_params_metrics_and_artifacts(cfg,
     (found,) = _runs(cfg)
     assert found.info.status == "FINISHED" and found.info.run_name == "task-run-test"
     assert found.data.tags["prg.task"] == "write" and found.data.tags["prg.family"] == "muse"
+    assert found.data.tags["mlflow.note.content"].startswith("**prg-write**: a word written")
+    assert client_experiments(cfg) == ["prg-tests-tasks"]  # no training experiment is made
     assert found.data.params == {"text": "cat", "generate.speed_cm_s": "2.0", "generate.seed": "0"}
     assert found.data.metrics == {"write/latency_ms": 12.5, "write/points": 7.0}
     client = mlflow_client(cfg.logger.tracking_uri)
     assert [a.path for a in client.list_artifacts(found.info.run_id, "word")] == ["word/word.json"]
+
+
+def client_experiments(cfg) -> list[str]:
+    client = mlflow_client(cfg.logger.tracking_uri)
+    return [e.name for e in client.search_experiments() if e.name != "Default"]
 
 
 @pytest.mark.parametrize(
@@ -93,4 +101,7 @@ def test_a_command_whose_work_fails_leaves_a_failed_run(tmp_path, untrained_muse
     client = mlflow_client(sqlite_uri(tmp_path / "mlruns.db"))
     (found,) = client.search_runs([e.experiment_id for e in client.search_experiments()])
     assert found.info.status == "FAILED" and found.data.tags["prg.task"] == "write"
+    assert client.get_experiment(found.info.experiment_id).name == "prg-tasks"
+    note = found.data.tags["mlflow.note.content"]  # the command line as typed
+    assert "Command: `prg-write text=cat trajectories=" in note and "Model: `muse`" in note
     assert not (tmp_path / "out").exists()

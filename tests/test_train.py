@@ -43,7 +43,7 @@ def test_run_records_params_metrics_config_figures_and_checkpoint(tmp_path, smal
     assert run.data.tags["prg.git_commit"]
     history = client.get_metric_history(result.run_id, "train/loss")
     assert [m.step for m in history] == sorted(m.step for m in history) and len(history) == 2
-    for name in ("val/loss", "train/rec_traj", "train/kl_label", "train/skl"):
+    for name in ("val/loss", "train/rec_T", "train/kl_S", "train/skl", "val/nll_per_dim_T"):
         assert name in run.data.metrics
     artifacts = {a.path for a in client.list_artifacts(result.run_id, "figures/final")}
     assert {"figures/final/label_to_traj.png", "figures/final/recon_traj.png"} <= artifacts
@@ -58,18 +58,33 @@ def test_run_records_params_metrics_config_figures_and_checkpoint(tmp_path, smal
 
 
 def test_resume_from_last_checkpoint_continues_the_same_run(tmp_path, small_dataset):
-    first = train(_cfg(tmp_path, small_dataset, "model=cvae", "trainer.max_epochs=1"))
+    every = "trainer.log_every_n_steps=2"  # 3 batches an epoch: a window spans the resume
+    first = train(_cfg(tmp_path, small_dataset, "model=cvae", "trainer.max_epochs=1", every))
     last = tmp_path / "checkpoints/prg/cvae-seed0/last.ckpt"
     assert torch.load(last, weights_only=False)["mlflow_run_id"] == first.run_id
     second = train(
-        _cfg(tmp_path, small_dataset, "model=cvae", "trainer.max_epochs=2", f"ckpt_path={last}")
+        _cfg(
+            tmp_path,
+            small_dataset,
+            "model=cvae",
+            "trainer.max_epochs=2",
+            f"ckpt_path={last}",
+            every,
+        )
     )
     assert second.run_id == first.run_id
     client = _client(tmp_path)
     assert len(client.search_runs([client.get_experiment_by_name("prg").experiment_id])) == 1
     epochs = [m.value for m in client.get_metric_history(first.run_id, "epoch")]
     assert sorted(set(epochs)) == [0.0, 1.0]
-    assert len(client.get_metric_history(first.run_id, "train/loss")) == 2
+    epoch_means = client.get_metric_history(first.run_id, "train/loss")
+    assert len(epoch_means) == 2
+    # steps 1-2, 3-4 (across the resume: its first step came back from the checkpoint), 5-6
+    windows = client.get_metric_history(first.run_id, "train_steps/loss")
+    assert [m.step for m in windows] == [1, 3, 5]
+    assert 2 * sum(m.value for m in windows) == pytest.approx(
+        3 * sum(m.value for m in epoch_means), rel=1e-5
+    )
 
 
 def test_same_seed_same_first_epoch_losses(tmp_path, small_dataset):
@@ -130,6 +145,10 @@ def test_multirun_jobs_land_under_one_parent_run(tmp_path, small_dataset, launch
     for child in children:
         assert child.info.status == "FINISHED"
         assert {"train/loss", "val/loss"} <= set(child.data.metrics)
+        family, seed = child.data.tags["prg.family"], child.data.tags["prg.seed"]
+        # the description's command reruns this job alone
+        assert f"prg-train model={family}" in child.data.tags["mlflow.note.content"]
+        assert (f" seed={seed}" in child.data.tags["mlflow.note.content"]) == (launcher != "basic")
         assert [a.path for a in client.list_artifacts(child.info.run_id, "checkpoints")] == [
             "checkpoints/best.ckpt"
         ]

@@ -62,7 +62,7 @@ def test_writes_the_word_its_renderings_rollout_and_an_mlflow_run(tmp_path, chec
     np.testing.assert_allclose(motion[0, 1:3], word.points[0], atol=1e-5)
     client = MlflowClient(sqlite_uri(tmp_path / "mlruns.db"))
     (run,) = client.search_runs(
-        [client.get_experiment_by_name("prg").experiment_id], "tags.`prg.task` = 'write'"
+        [client.get_experiment_by_name("prg-tasks").experiment_id], "tags.`prg.task` = 'write'"
     )
     assert run.data.params["text"] == "ab cd"
     assert run.data.metrics["write/points"] == len(word.points)
@@ -150,7 +150,7 @@ def test_audio_channel_speech_to_word_with_recording(tmp_path, checkpoint):
     entities = read_entities(out / "word.rrd")
     assert {"inputs/audio", "inputs/waveform", "inputs/transcript"} <= set(entities)
     client = MlflowClient(sqlite_uri(tmp_path / "mlruns.db"))
-    (run,) = client.search_runs([client.get_experiment_by_name("prg").experiment_id])
+    (run,) = client.search_runs([client.get_experiment_by_name("prg-tasks").experiment_id])
     assert run.data.params["speech.word"] == "jump" and run.data.params["audio"] == str(wav)
     assert run.data.metrics["write/recognise_ms"] > 0
 
@@ -225,3 +225,63 @@ def test_unknown_characters_are_skipped_on_request(tmp_path, checkpoint):
     word, _ = write(cfg)
     assert word.text == "hllo wrld"
     assert WordTrajectory.from_json(out / "word.json").text == "hllo wrld"
+
+
+WORD_FOLDER = r"ab_cd-\d{8}-\d{6}(-\d+)?"  # <text>-<YYYYmmdd-HHMMSS>, -2 ... when taken
+
+
+def test_each_word_gets_its_own_folder_named_by_text_and_time(tmp_path, checkpoint):
+    """The default out_dir: outputs/write/<family>/<text>-<time>, a new folder every time."""
+    import re
+
+    args = ["text=ab cd", f"ckpt={checkpoint}", f"paths.root_dir={tmp_path}", "mlflow=false"]
+    folders = [write(compose_config("write", args))[1] for _ in range(2)]
+    assert folders[0] != folders[1]
+    family = tmp_path / "outputs" / "write" / "muse"
+    assert sorted(family.iterdir()) == sorted(folders)
+    for folder in folders:
+        assert re.fullmatch(WORD_FOLDER, folder.name), folder.name
+        assert {p.name for p in folder.iterdir()} == {
+            "word.json",
+            "word.png",
+            "word.svg",
+            "dmp_rollout.csv",
+            "motion.csv",
+            "word.rrd",
+        }
+        assert WordTrajectory.from_json(folder / "word.json").text == "ab cd"
+
+
+def test_folders_made_at_once_never_share_a_name_and_a_failed_one_is_removed(tmp_path):
+    import re
+
+    from prg.files import word_folder
+
+    template = str(tmp_path / "w" / "{text}-{time}")
+    made = []
+    for _ in range(3):
+        with word_folder(template, "ab cd!") as folder:
+            made.append(folder)
+    assert len(set(made)) == 3 and all(f.is_dir() for f in made)
+    assert all(re.fullmatch(WORD_FOLDER, f.name) for f in made), made
+    with pytest.raises(RuntimeError, match="boom"), word_folder(template, "ab cd") as folder:
+        raise RuntimeError("boom")
+    assert not folder.exists() and sorted((tmp_path / "w").iterdir()) == sorted(made)
+    with word_folder(tmp_path / "mine", "ab cd") as folder:  # no placeholder: that folder
+        assert folder == tmp_path / "mine" and not folder.exists()  # staged_outputs makes it
+
+
+@pytest.mark.parametrize(
+    "out_dir, expected",
+    [("'{tmp}/{{word}}'", "unknown placeholder {word}"), ("'{tmp}/{{text'", "placeholders")],
+    ids=["unknown-field", "unpaired-brace"],
+)
+def test_a_bad_folder_template_is_refused_before_writing(tmp_path, checkpoint, out_dir, expected):
+    cfg = compose_config(
+        "write",
+        ["text=hi", f"ckpt={checkpoint}", f"out_dir={out_dir.format(tmp=tmp_path)}"],
+    )
+    with pytest.raises(UsageError) as refused:
+        write(cfg)
+    assert expected in str(refused.value) and "out_dir" in str(refused.value)
+    assert list(tmp_path.iterdir()) == []

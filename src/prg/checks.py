@@ -8,6 +8,12 @@ value outside them with one line naming the option and what is accepted. NaN and
 refused everywhere. ``tests/test_bad_inputs.py`` checks that every numeric option of the composed
 configs has an entry here, so a new option cannot skip the check.
 
+:data:`CHOICES` holds the options that name one of a fixed set (``family``: :data:`FAMILIES`),
+checked by :func:`check_values` too, and :func:`unknown_key` is the line for an option the
+config does not have (with the closest keys and the keys accepted there). The command runner
+(:mod:`prg.commands.cli`) runs these checks on the composed command line before any heavy
+library is imported.
+
 :func:`require_number` is the same check for one value (for settings read outside the config);
 :func:`literal_text` recovers the characters the user typed for a text option that Hydra typed as
 a number or a boolean (``text=true``, ``text=1e3``).
@@ -15,9 +21,10 @@ a number or a boolean (``text=true``, ``text=1e3``).
 
 from __future__ import annotations
 
+import difflib
 import fnmatch
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -312,6 +319,14 @@ RANGES: dict[str, Range] = {
 }
 
 
+# ---- options that name one of a fixed set ----
+FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse")  # the model families: conf/model/<family>.yaml
+CHOICES: dict[str, tuple[str, tuple[str, ...]]] = {  # key -> (what a value is, accepted values)
+    "family": ("family", FAMILIES),  # prg-write, prg-dictaphone, prg-simulate
+    "families": ("family", FAMILIES),  # prg-evaluate (a list)
+}
+
+
 def range_of(key: str) -> Range | None:
     """The entry of :data:`RANGES` for the dotted ``key`` (exact first, then patterns)."""
     if key in RANGES:
@@ -362,9 +377,13 @@ def check_values(cfg: Any) -> None:
     """Refuse the first numeric option of ``cfg`` (DictConfig or mapping) outside its range.
 
     Keys without an entry in :data:`RANGES` are not checked here (their own code checks them);
-    list values are checked element by element (``paper.size_cm=[0,29.7]``).
+    list values are checked element by element (``paper.size_cm=[0,29.7]``). The options of
+    :data:`CHOICES` must name one of their accepted values.
     """
     for key, value in leaves(_plain(cfg)):
+        if key in CHOICES:
+            check_choice(value, key)
+            continue
         spec = range_of(key)
         if spec is None:
             continue
@@ -377,6 +396,57 @@ def check_values(cfg: Any) -> None:
                     )
         else:
             require_number(value, key, spec)
+
+
+def check_choice(value: Any, key: str) -> None:
+    """Refuse a value of the option ``key`` (:data:`CHOICES`; each item of a list) that is not
+    one of its accepted values: ``unknown family musee; accepted: cvae, avae_ts, avae_ti, muse``."""
+    what, accepted = CHOICES[key]
+    for item in value if isinstance(value, list | tuple) else [value]:
+        if item not in accepted:
+            where = f" in {key}={_short(value)}" if isinstance(value, list | tuple) else ""
+            raise UsageError(f"unknown {what} {item}{where}; accepted: {', '.join(accepted)}")
+
+
+def _keys(node: Mapping, prefix: str = "") -> Iterator[str]:
+    """Every dotted key of a plain nested mapping, the mappings' own keys included."""
+    for name, value in node.items():
+        yield f"{prefix}{name}"
+        if isinstance(value, Mapping):
+            yield from _keys(value, f"{prefix}{name}.")
+
+
+def _closest(key: str, known: Iterable[str], cutoff: float = 0.75) -> list[str]:
+    """Up to three of ``known`` most like ``key``, as a whole or by their last part
+    (``temperature`` -> ``generate.temperature``)."""
+
+    def likeness(other: str) -> float:
+        whole = difflib.SequenceMatcher(None, key, other).ratio()
+        last = difflib.SequenceMatcher(None, key.rpartition(".")[2], other.rpartition(".")[2])
+        return max(whole, last.ratio())
+
+    scored = sorted(((likeness(k), k) for k in known), key=lambda s: -s[0])
+    return [k for score, k in scored[:3] if score >= cutoff]
+
+
+def unknown_key(key: str, config: Mapping) -> str:
+    """The line for an option ``key`` that ``config`` (a plain nested mapping: the composed
+    config) does not have: the closest existing keys and the keys accepted where it was given.
+
+    ``unknown key txt (closest: text); accepted top-level keys: text, on_unknown, ...``
+    """
+    parent, _, _ = key.rpartition(".")
+    node: Any = config
+    for part in parent.split(".") if parent else []:
+        node = node.get(part) if isinstance(node, Mapping) else None
+    closest = _closest(key, _keys(config))
+    line = f"unknown key {key}"
+    if closest:
+        line += f" (closest: {', '.join(closest)})"
+    if not isinstance(node, Mapping):
+        return f"{line}; {parent} takes a value, not keys"
+    where = f"under {parent}" if parent else "top-level keys"
+    return f"{line}; accepted {where}: {', '.join(map(str, node))}"
 
 
 def _typed_override(key: str) -> str | None:

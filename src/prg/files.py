@@ -19,17 +19,21 @@ could not be written.
 from __future__ import annotations
 
 import hashlib
+import itertools
 import json
 import os
 import re
 import shutil
+import string
+import time
 from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from prg.errors import UsageError
 from prg.signals import deferred
 
 _LEFTOVER = re.compile(r"^\..+\.(?:tmp|old)-(\d+)(?:\.\w+)?$")
@@ -167,8 +171,6 @@ def read_json(path: str | os.PathLike, name: str, missing: str | None = None) ->
     """The JSON document in ``path``; one :class:`~prg.errors.UsageError` naming it as ``name``
     (``"trajectories file"``) when it does not exist (``missing``, if given, is that message) or
     is not readable JSON."""
-    from prg.errors import UsageError
-
     path = Path(path)
     try:
         return json.loads(path.read_text())
@@ -271,3 +273,70 @@ def sha256_file(path: str | os.PathLike) -> str:
         while chunk := handle.read(_HASH_CHUNK):
             digest.update(chunk)
     return digest.hexdigest()
+
+
+#: The fields a folder template may hold (``out_dir`` of ``prg-write``, ``prg-simulate`` and ``prg-export``).
+FOLDER_FIELDS = ("text", "time")
+FOLDER_TIME = "%Y%m%d-%H%M%S"
+_FOLDER_TEXT_CHARS = 40
+
+
+def folder_fields(template: str | os.PathLike, key: str = "out_dir") -> set[str]:
+    """The ``{field}`` placeholders of an output-folder template (none: it names the folder).
+
+    Raises
+    ------
+    UsageError
+        Naming ``key`` when a field is not one of :data:`FOLDER_FIELDS` or a brace is unpaired.
+    """
+    try:
+        fields = {f for _, f, _, _ in string.Formatter().parse(str(template)) if f is not None}
+    except ValueError as err:
+        raise UsageError(f"{key} {template}: {err} (placeholders: {{text}}, {{time}})") from None
+    unknown = sorted(fields - set(FOLDER_FIELDS))
+    if unknown:
+        raise UsageError(
+            f"{key} {template}: unknown placeholder {{{unknown[0]}}} "
+            "(accepted: {text}, the word; {time}, YYYYmmdd-HHMMSS)"
+        )
+    return fields
+
+
+@contextmanager
+def word_folder(template: str | os.PathLike, text: str, key: str = "out_dir") -> Iterator[Path]:
+    """The folder a word's outputs go to.
+
+    A template without placeholders names the folder itself (reused: the outputs replace those
+    of an earlier word there). Otherwise ``{text}`` becomes the word (letters and digits, any
+    other run of characters ``_``, at most 40 characters) and ``{time}`` the local time
+    (``YYYYmmdd-HHMMSS``), and the folder is made new: ``-2``, ``-3`` ... is appended while the
+    name is taken (created exclusively, so two runs never share one). A new folder that is still
+    empty when the block fails is removed again.
+
+    Raises
+    ------
+    UsageError
+        Naming ``key`` on a bad template or when the folder cannot be created.
+    """
+    if not folder_fields(template, key):
+        yield Path(template)
+        return
+    name = re.sub(r"[^0-9A-Za-z]+", "_", text).strip("_")[:_FOLDER_TEXT_CHARS] or "word"
+    base = Path(str(template).format(text=name, time=time.strftime(FOLDER_TIME)))
+    try:
+        base.parent.mkdir(parents=True, exist_ok=True)
+        for n in itertools.count(1):
+            folder = base if n == 1 else base.with_name(f"{base.name}-{n}")
+            try:
+                folder.mkdir()
+                break
+            except FileExistsError:
+                continue
+    except OSError as err:
+        raise UsageError(f"{key} {base}: cannot create the folder ({err.strerror})") from None
+    try:
+        yield folder
+    except BaseException:
+        with suppress(OSError):
+            folder.rmdir()  # only while empty: never outputs
+        raise

@@ -1,8 +1,26 @@
-"""MLflow helpers: the default SQLite store, the logger, run tags, sweep parent runs.
+"""MLflow helpers: the default SQLite store, the logger, run tags and descriptions, sweep parent
+runs, moving a store.
 
 Default store: ``sqlite:///<root>/mlruns.db`` with artifacts in ``<root>/mlartifacts``;
 ``MLFLOW_TRACKING_URI`` overrides the store (any server). Review runs with
 ``mlflow ui --backend-store-uri sqlite:///mlruns.db``.
+
+Training runs go to the experiment ``logger.experiment_name`` (``prg``), the runs of the other
+commands (``prg-evaluate``, ``prg-write``, ``prg-simulate``, ``prg-dictaphone``) to
+``logger.task_experiment_name`` (``prg-tasks``). Both are tagged ``mlflow.experimentKind =
+custom_model_development`` (:data:`EXPERIMENT_KIND`), the kind the MLflow UI shows as "Machine
+learning". MLflow 3.17's UI decides what an experiment opens on from its "GenAI / Model
+training" switch (remembered per browser, or ``?workflowType=machine_learning`` in the address,
+:func:`runs_page`), not from that tag; the tag still names the kind for the UI builds and tools
+that read it.
+
+Metric names sent to MLflow name modalities by the paper's letters, as the evaluation's metrics
+and the report tables do (:func:`metric_name`: ``train/rec_traj`` -> ``train/rec_T``); the
+trainer's own metrics and the DVC ``metrics.json`` files keep the modality names.
+
+Artifact locations are absolute ``file://`` URIs (MLflow resolves a relative one against the
+working folder when it creates an experiment, and ``mlflow-artifacts:`` URIs need a tracking
+server), so a moved store is re-pointed with :func:`move_store`.
 
 Several processes may write to one SQLite store at once (parallel sweep jobs): the default URI
 waits up to 60 s for a lock (``?timeout=60``; MLflow's own sessions wait 20 s), and a new
@@ -17,19 +35,58 @@ exports its id in ``PRG_PARENT_RUN_ID``; each job's run is tagged ``mlflow.paren
 
 from __future__ import annotations
 
+import functools
 import math
 import os
+import re
+import shlex
+import sqlite3
 import tempfile
 import time
 from collections.abc import Iterator, Mapping
-from contextlib import contextmanager
+from contextlib import closing, contextmanager
 from pathlib import Path
 from typing import Any
 
 from hydra.experimental.callback import Callback as HydraCallback
 from omegaconf import DictConfig
 
+from prg.errors import UsageError
+
 PARENT_ENV = "PRG_PARENT_RUN_ID"
+EXPERIMENT_KIND = {"mlflow.experimentKind": "custom_model_development"}
+"""The experiment tag the MLflow UI writes when a user picks "Machine learning" as an
+experiment's kind (``mlflow/server/js``: ``ExperimentKind.CUSTOM_MODEL_DEVELOPMENT``)."""
+DESCRIPTION_TAG = "mlflow.note.content"  # the run's description in the MLflow UI
+
+
+@functools.cache
+def _modality_names() -> tuple[re.Pattern, Mapping[str, str]]:
+    from prg.models.modalities import LETTER  # imports torch: only when metrics are logged
+
+    return re.compile(r"(?<![A-Za-z0-9])(" + "|".join(LETTER) + r")(?![A-Za-z0-9])"), LETTER
+
+
+def metric_name(key: str) -> str:
+    """``key`` with each modality name as the paper's letter (``val/kl_label`` ->
+    ``val/kl_S``, ``classifier/traj/test_accuracy`` -> ``classifier/T/test_accuracy``)."""
+    pattern, letter = _modality_names()
+    return pattern.sub(lambda m: letter[m.group(1)], key)
+
+
+def runs_page(experiment_id: str, ui: str = "http://127.0.0.1:5000") -> str:
+    """The MLflow UI's runs table of an experiment, in the "Model training" view."""
+    return f"{ui}/#/experiments/{experiment_id}/runs?workflowType=machine_learning"
+
+
+def command_line(command: str) -> str:
+    """``command`` with the Hydra overrides of the running job (as typed, shell-quoted); inside
+    a multirun, the job's own overrides (the command that reruns this job alone)."""
+    from hydra.core.hydra_config import HydraConfig
+
+    if not HydraConfig.initialized():
+        return f"{command} (called from Python)"
+    return " ".join([command, *map(shlex.quote, HydraConfig.get().overrides.task)])
 
 
 def artifact_location(path: str | os.PathLike) -> str:
@@ -86,7 +143,8 @@ def mlflow_client(uri: str):
 
 
 def get_experiment_id(client, name: str, artifacts: str | None) -> str:
-    """Id of the experiment ``name``, created (with its artifact location) if missing.
+    """Id of the experiment ``name``, created (with its artifact location and
+    :data:`EXPERIMENT_KIND`) if missing; an existing one without a kind gets the tag.
 
     On a tracking server the location is the server's (``artifacts`` is ignored). Tolerates a
     concurrent creation by another sweep job.
@@ -98,22 +156,49 @@ def get_experiment_id(client, name: str, artifacts: str | None) -> str:
     for _ in range(5):
         experiment = client.get_experiment_by_name(name)
         if experiment is not None:
+            for key, value in EXPERIMENT_KIND.items():
+                if key not in experiment.tags:  # a kind picked in the UI stays
+                    client.set_experiment_tag(experiment.experiment_id, key, value)
             return experiment.experiment_id
         try:
-            return client.create_experiment(name, artifact_location=artifacts)
+            return client.create_experiment(name, artifact_location=artifacts, tags=EXPERIMENT_KIND)
         except MlflowException:
             time.sleep(0.5)
     raise RuntimeError(f"could not create or find MLflow experiment {name!r}")
 
 
+def experiment_of(client, cfg: Any, tasks: bool) -> str:
+    """Id of the configured experiment (``cfg.logger``) of training runs, or with ``tasks`` of
+    the other commands' runs (``logger.task_experiment_name``)."""
+    logger = cfg.logger
+    name = logger.task_experiment_name if tasks else logger.experiment_name
+    return get_experiment_id(client, name, artifact_location(logger.artifact_location))
+
+
 def task_client(cfg: Any) -> tuple[Any, str]:
-    """An ``MlflowClient`` on the configured store and the id of the configured experiment
+    """An ``MlflowClient`` on the configured store and the id of the task experiment
     (``cfg.logger``, ``cfg.paths.root_dir``), for commands that log runs themselves."""
     client = mlflow_client(tracking_uri(cfg.logger.get("tracking_uri"), cfg.paths.root_dir))
-    experiment = get_experiment_id(
-        client, cfg.logger.experiment_name, artifact_location(cfg.logger.artifact_location)
-    )
-    return client, experiment
+    return client, experiment_of(client, cfg, tasks=True)
+
+
+TASKS = {
+    "evaluate": "Table I log-likelihoods, coherence and robustness of trained models",
+    "write": "a word written by a trained model (prg-write)",
+    "simulate": "a simulated arm writing a word (prg-simulate)",
+    "dictaphone": "Table II: words written from speech and from letter images",
+}
+
+
+def task_description(task: str, tags: Mapping[str, str]) -> str:
+    """The MLflow description of a command's run: what it does, with which model, the command."""
+    lines = [f"**prg-{task}**: {TASKS.get(task, task)}"]
+    if "prg.family" in tags:
+        lines.append(f"Model: `{tags['prg.family']}`")
+    if "prg.data.name" in tags:
+        lines.append(f"Data: `{tags['prg.data.name']}`")
+    lines.append(f"Command: `{command_line(f'prg-{task}')}`")
+    return "  \n".join(lines)
 
 
 class TaskRun:
@@ -152,7 +237,8 @@ def task_run(
 ) -> Iterator[TaskRun | None]:
     """The MLflow run of one command's work, on the configured store (``cfg.logger``,
     ``cfg.paths.root_dir``), named ``cfg.run_name`` and tagged ``prg.task=<task>`` (and the sweep's
-    parent run inside a Hydra multirun).
+    parent run inside a Hydra multirun), in the task experiment (``logger.task_experiment_name``)
+    with a description (:func:`task_description`).
 
     Opened before the work and ended after it: ``FINISHED`` when the block completes, ``FAILED``
     when it raises, ``KILLED`` when a signal stops it (the error is re-raised either way). With
@@ -165,6 +251,7 @@ def task_run(
 
     client, experiment = task_client(cfg)
     all_tags = {"prg.task": task, **(tags or {})}
+    all_tags[DESCRIPTION_TAG] = task_description(task, all_tags)
     if os.environ.get(PARENT_ENV):
         all_tags["mlflow.parentRunId"] = os.environ[PARENT_ENV]
     run_id = client.create_run(experiment, run_name=cfg.run_name, tags=all_tags).info.run_id
@@ -186,12 +273,15 @@ def mlflow_logger(
     artifact_location: str,
     run_id: str | None = None,
     tags: dict[str, str] | None = None,
+    task_experiment_name: str | None = None,
 ):
-    """A Lightning ``MLFlowLogger`` on an explicit store (never the default ./mlruns)."""
-    from lightning.pytorch.loggers import MLFlowLogger
+    """A Lightning MLflow logger on an explicit store (never the default ./mlruns), logging to
+    the training experiment (``task_experiment_name`` is the other commands') with the project's
+    metric names (:class:`prg.training.mlflow_logger.LetterNamedMLFlowLogger`)."""
+    from prg.training.mlflow_logger import LetterNamedMLFlowLogger
 
     get_experiment_id(mlflow_client(tracking_uri), experiment_name, artifact_location)
-    return MLFlowLogger(
+    return LetterNamedMLFlowLogger(
         experiment_name=experiment_name,
         run_name=None if run_id else run_name,
         tracking_uri=tracking_uri,
@@ -229,16 +319,18 @@ class SweepParentRun(HydraCallback):
             return
         uri = tracking_uri(config.logger.get("tracking_uri"), config.paths.root_dir)
         self.client = mlflow_client(uri)
-        experiment_id = get_experiment_id(
-            self.client,
-            config.logger.experiment_name,
-            artifact_location(config.logger.artifact_location),
-        )
+        # a sweep of prg-train groups training runs; of another command, that command's runs
+        experiment_id = experiment_of(self.client, config, tasks="trainer" not in config)
         overrides = " ".join(config.hydra.overrides.task)
+        command = f"prg-{config.hydra.job.config_name} -m {overrides}"
         run = self.client.create_run(
             experiment_id,
             run_name=f"sweep {time.strftime('%Y-%m-%d %H:%M:%S')}",
-            tags={"prg.sweep": "parent", "prg.sweep.overrides": overrides[:5000]},
+            tags={
+                "prg.sweep": "parent",
+                "prg.sweep.overrides": overrides[:5000],
+                DESCRIPTION_TAG: f"A sweep: its jobs are the child runs.  \nCommand: `{command}`",
+            },
         )
         self.run_id = run.info.run_id
         os.environ[PARENT_ENV] = self.run_id
@@ -248,3 +340,68 @@ class SweepParentRun(HydraCallback):
             self.client.set_terminated(self.run_id)
             os.environ.pop(PARENT_ENV, None)
             self.run_id = None
+
+
+# Where an MLflow SQLite store records artifact locations (tables and columns of MLflow 3).
+_LOCATIONS = {
+    "experiments": ("artifact_location",),
+    "runs": ("artifact_uri",),
+    "model_versions": ("source", "storage_location"),
+    "logged_models": ("artifact_location",),
+}
+
+
+def move_store(
+    db: str | os.PathLike, old_artifacts: str | os.PathLike, new_artifacts: str | os.PathLike
+) -> int:
+    """Re-point a moved SQLite store: every artifact location under ``old_artifacts`` (the
+    artifacts folder before the move, as a path) now under ``new_artifacts`` (where it is now).
+    Experiments created afterwards get the location that ``logger.artifact_location`` gives.
+    Returns how many locations changed; a bad input is a :class:`~prg.errors.UsageError`."""
+    db, new = Path(db), Path(new_artifacts).expanduser().resolve()
+    old = Path(os.path.abspath(Path(old_artifacts).expanduser()))  # it need not exist any more
+    if not db.is_file():
+        raise UsageError(f"store {db}: no such file (the mlruns.db to re-point)")
+    if not new.is_dir():
+        raise UsageError(f"new artifacts folder {new}: no such folder (move mlartifacts first)")
+    changed = 0
+    with closing(sqlite3.connect(db, timeout=SQLITE_TIMEOUT_S)) as con, con:
+        tables = {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+        if not {"experiments", "runs"} <= tables:
+            raise UsageError(f"store {db}: not an MLflow SQLite store (no experiments/runs tables)")
+        for table, columns in _LOCATIONS.items():
+            present = {r[1] for r in con.execute(f"PRAGMA table_info({table})")}
+            for column in (c for c in columns if c in present):
+                for before, after in ((old.as_uri(), new.as_uri()), (str(old), str(new))):
+                    changed += con.execute(
+                        f"UPDATE {table} SET {column} = ? || substr({column}, ?) "
+                        f"WHERE substr({column}, 1, ?) = ? "
+                        f"AND substr({column}, ?, 1) IN ('', '/')",
+                        (after, len(before) + 1, len(before), before, len(before) + 1),
+                    ).rowcount
+    return changed
+
+
+USAGE = "python -m prg.tracking move-store DB OLD_ARTIFACTS NEW_ARTIFACTS"
+
+
+def main(argv: list[str]) -> int:
+    """``python -m prg.tracking move-store mlruns.db /old/checkout/mlartifacts mlartifacts``."""
+    import sys
+
+    if len(argv) != 4 or argv[0] != "move-store":
+        print(f"prg.tracking: error: usage: {USAGE}", file=sys.stderr)
+        return 2
+    try:
+        changed = move_store(*argv[1:])
+    except UsageError as err:
+        print(f"prg.tracking: error: {err}", file=sys.stderr)
+        return 2
+    print(f"{changed} artifact locations now under {Path(argv[3]).resolve()}")
+    return 0
+
+
+if __name__ == "__main__":
+    import sys
+
+    sys.exit(main(sys.argv[1:]))

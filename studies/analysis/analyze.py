@@ -16,6 +16,7 @@ them.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -33,6 +34,9 @@ from studies.analysis.validate import (
     check_responses,
     load_responses,
 )
+
+if TYPE_CHECKING:
+    from studies.analysis.participants import Truth
 
 PAPER = "paper-faithful"
 RECOMMENDED = "recommended"
@@ -55,11 +59,14 @@ class StudyAnalysis:
     verdict: dict
     warnings: list[str] = field(default_factory=list)
     contrasts: list[str] = field(default_factory=list)
+    truth: Truth | None = None  #: simulated: what the participants were drawn from
+    truth_path: str | None = None  #: where it was read (see studies.analysis.truth.with_truth)
 
 
 @dataclass
 class Analysis:
-    """A whole responses file analysed."""
+    """A whole responses file analysed; ``origin`` says whose answers they are (``study``,
+    ``pilot`` or ``simulated``, see :data:`studies.analysis.schema.ORIGINS`)."""
 
     source: str
     config: AnalysisSettings
@@ -67,6 +74,7 @@ class Analysis:
     attention: pd.DataFrame
     rows_in_file: int
     studies: list[StudyAnalysis]
+    origin: str = "study"
 
 
 def _tag(frame: pd.DataFrame, kind: str, approach: str, hypothesis: str) -> pd.DataFrame:
@@ -556,4 +564,4 @@ def _analyze(resp: Responses, cfg: AnalysisSettings) -> Analysis:
             raise UsageError(f"{resp.path}: no {kind} rows left to analyse after exclusions")
         fn = analyze_turing if kind == TURING else analyze_readability
         studies.append(fn(used, cfg))
-    return Analysis(resp.path, cfg, notes, att, len(resp.frame), studies)
+    return Analysis(resp.path, cfg, notes, att, len(resp.frame), studies, resp.origin)

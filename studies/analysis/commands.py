@@ -8,7 +8,7 @@ with :func:`register`).
 
 Usage::
 
-    prg-study analyze RESPONSES.csv [--study conf/study/turing.yaml] [--out DIR]
+    prg-study analyze RESPONSES.csv [--study conf/study/turing.yaml] [--out DIR] [--truth JSON]
                       [--margin M] [--alpha A] [--chance C] [--margin-source preregistered|data]
                       [--kind turing|readability] [--include-attention-rows] [--keep-inattentive] [--no-mixed]
     prg-study power turing [--margin 0.05] [--rate 0.2 0.22] [--power 0.8 0.9] [--words 10 20]
@@ -145,6 +145,14 @@ def _add_analyze(subparsers: argparse._SubParsersAction) -> None:
         action="store_true",
         help="keep participants who failed an attention check",
     )
+    a.add_argument(
+        "--truth",
+        action="append",
+        metavar="JSON",
+        help="simulated responses: the simulation's truth, shown beside each estimate; one per "
+        "study (default: <responses name>.truth.json beside them, as prg-study simulate "
+        "writes it)",
+    )
     a.add_argument("--no-mixed", action="store_true", help="skip the crossed mixed logit (faster)")
     a.add_argument("--no-paper", action="store_true", help="leave out the paper-reproduction table")
 
@@ -270,6 +278,7 @@ def run_analyze(args: argparse.Namespace) -> int:
     from studies.analysis.analyze import analyze_file
     from studies.analysis.config import load_config, with_overrides
     from studies.analysis.report import check_out_dir, write_report
+    from studies.analysis.truth import read_truth, truth_path_for, with_truth
 
     cfg = load_config(args.study)
     cfg = with_overrides(
@@ -285,8 +294,16 @@ def run_analyze(args: argparse.Namespace) -> int:
     )
     out = check_out_dir(args.out or Path("reports") / "study" / Path(args.responses).stem)
     check_output(out, "--out")
+    truths = [(read_truth(path), path) for path in args.truth or []]  # bad files fail first
     analysis = analyze_file(args.responses, cfg)
+    beside = truth_path_for(args.responses)
+    if not truths and analysis.origin == "simulated" and beside.is_file():
+        truths = [(read_truth(beside, "the truth file"), str(beside))]
+    analysis = with_truth(analysis, truths)
     write_report(analysis, out, paper=not args.no_paper)
+    if analysis.origin != "study":
+        known = [f"; {st.kind} truth: {st.truth_path}" for st in analysis.studies if st.truth]
+        print(f"data: {analysis.origin.upper()} (the report says so first{''.join(known)})")
     for st in analysis.studies:
         for line in st.conclusions:
             print(f"{st.kind}: {line.replace('**', '')}")

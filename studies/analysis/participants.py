@@ -28,7 +28,14 @@ import pandas as pd
 from scipy import optimize, special, stats
 
 from studies.analysis.crossed_logit import MAX_ICC, intercept, latent_parameters
-from studies.analysis.schema import N_OPTIONS, READABILITY, STUDY1_COLUMNS, STUDY2_COLUMNS, TURING
+from studies.analysis.schema import (
+    N_OPTIONS,
+    READABILITY,
+    SIMULATED_VERSION,
+    STUDY1_COLUMNS,
+    STUDY2_COLUMNS,
+    TURING,
+)
 
 DEFAULT_WORDS: tuple[str, ...] = (
     "bell",
@@ -44,7 +51,7 @@ DEFAULT_WORDS: tuple[str, ...] = (
 )
 CONFIDENCE_CUTS = np.array([1.5, 2.5, 3.5, 4.5])
 CONFIDENCE_LATENT_SD = 1.5
-APP_VERSION = "simulated"
+APP_VERSION = SIMULATED_VERSION
 
 __all__ = [
     "APP_VERSION",

@@ -35,6 +35,7 @@ from studies.analysis.analyze import Analysis, StudyAnalysis
 from studies.analysis.schema import TURING
 
 REPORT_FILES = ("report.md", "report.html", "tests.csv")
+TRUTH_COLOR = "#c0392b"  #: the simulation's truth in the figures
 
 
 # --------------------------------------------------------------------------- a tiny document model
@@ -60,6 +61,10 @@ class Doc:
     def warn(self, text: str) -> None:
         self.blocks.append(("warn", text))
 
+    def banner(self, head: str, text: str) -> None:
+        """A notice that cannot be missed, e.g. that the data are simulated."""
+        self.blocks.append(("banner", head, text))
+
     def table(self, frame: pd.DataFrame, caption: str = "") -> None:
         self.blocks.append(("table", frame.astype(str), caption))
 
@@ -78,6 +83,8 @@ class Doc:
                 out += [f"- {item}" for item in b[1]] + [""]
             elif kind == "warn":
                 out += [f"> **Warning:** {b[1]}", ""]
+            elif kind == "banner":
+                out += [f"> **{b[1]}** — {b[2]}", ""]
             elif kind == "table":
                 frame, caption = b[1], b[2]
                 if caption:
@@ -105,6 +112,11 @@ class Doc:
                 body.append("<ul>" + "".join(f"<li>{_inline(i)}</li>" for i in b[1]) + "</ul>")
             elif kind == "warn":
                 body.append(f'<p class="warn"><strong>Warning:</strong> {_inline(b[1])}</p>')
+            elif kind == "banner":
+                body.append(
+                    f'<div class="banner" role="note"><strong>{_inline(b[1])}</strong> — '
+                    f"{_inline(b[2])}</div>"
+                )
             elif kind == "table":
                 frame, caption = b[1], b[2]
                 cap = f"<caption>{_inline(caption)}</caption>" if caption else ""
@@ -137,6 +149,8 @@ _CSS = (
     "th{background:#f3f3f3}caption{caption-side:top;text-align:left;font-style:italic;padding:0.3em 0}"
     "figure{margin:1em 0}img{max-width:100%}figcaption{font-style:italic;font-size:0.9em}"
     ".warn{background:#fff4e0;border-left:4px solid #e69500;padding:0.5em}"
+    ".banner{background:#a3142d;color:#fff;padding:0.6em 0.9em;border-radius:4px;margin:0 0 1em}"
+    ".banner strong{font-size:1.15em;margin-right:0.3em}.banner code{background:#0003}"
     "code{background:#f3f3f3;padding:0 0.2em}"
 )
 
@@ -168,7 +182,8 @@ def _num(x: float, digits: int = 3) -> str:
 
 
 def tests_table(tests: pd.DataFrame, digits: int = 3) -> pd.DataFrame:
-    """The human-readable view of a tests frame."""
+    """The human-readable view of a tests frame (with its ``truth`` beside the estimate when it
+    has one: see :mod:`studies.analysis.truth`)."""
     rows = []
     for r in tests.itertuples(index=False):
         if np.isfinite(r.estimate):
@@ -181,20 +196,19 @@ def tests_table(tests: pd.DataFrame, digits: int = 3) -> pd.DataFrame:
             lvl = f"{r.ci_level:.0%}" if np.isfinite(r.ci_level) else ""
         else:
             est, lvl = "–", ""
-        rows.append(
-            {
-                "approach": r.approach,
-                "test": r.test,
-                "n": ""
-                if not np.isfinite(r.n)
-                else f"{r.n:.0f}"
-                + (f" ({r.clusters:.0f} clusters)" if np.isfinite(r.clusters) else ""),
-                "estimate [CI]": est,
-                "CI": lvl,
-                "p": fmt_p(r.p_value),
-                "conclusion": r.conclusion,
-            }
-        )
+        row = {
+            "approach": r.approach,
+            "test": r.test,
+            "n": ""
+            if not np.isfinite(r.n)
+            else f"{r.n:.0f}"
+            + (f" ({r.clusters:.0f} clusters)" if np.isfinite(r.clusters) else ""),
+            "estimate [CI]": est,
+        }
+        if "truth" in tests:  # simulated data: what the estimate should recover
+            row["truth"] = _num(r.truth, digits)
+        row |= {"CI": lvl, "p": fmt_p(r.p_value), "conclusion": r.conclusion}
+        rows.append(row)
     return pd.DataFrame(rows)
 
 
@@ -230,9 +244,14 @@ def _participants_histogram(ax, values, bins) -> None:
 
 
 def fig_turing_words(
-    per_word: pd.DataFrame, chance: float, margin: float, overall: tuple[float, float, float] | None
+    per_word: pd.DataFrame,
+    chance: float,
+    margin: float,
+    overall: tuple[float, float, float] | None,
+    truth: float | None = None,
 ):
-    """Per-word rates of picking the robot, Wilson CIs, chance and the equivalence band."""
+    """Per-word rates of picking the robot, Wilson CIs, chance and the equivalence band; with
+    simulated data the true rate (``truth``) and each word's (``per_word["truth"]``)."""
     plt = pyplot()
     pw = per_word.sort_values("rate")
     fig, ax = plt.subplots(figsize=(6.4, 0.35 * len(pw) + 1.6))
@@ -256,6 +275,10 @@ def fig_turing_words(
         color="black",
         capsize=3,
     )
+    if truth is not None:
+        ax.axvline(truth, color=TRUTH_COLOR, ls=":", lw=1.6, label=f"simulated truth {truth:.2f}")
+    if "truth" in pw:
+        ax.plot(pw["truth"], y, "x", color=TRUTH_COLOR, ms=7, label="true rate of the word")
     ax.set_yticks(y, pw["word"].astype(str))
     ax.set_xlim(0, 1)
     _label(
@@ -282,8 +305,9 @@ def fig_turing_participants(per_part: pd.DataFrame, chance: float):
     return fig
 
 
-def fig_confidence(data: pd.DataFrame, neutral: float):
-    """Confidence ratings (by whether the robot was picked) and participant mean confidence."""
+def fig_confidence(data: pd.DataFrame, neutral: float, truth: float | None = None):
+    """Confidence ratings (by whether the robot was picked) and participant mean confidence
+    (and, simulated, the true mean ``truth``)."""
     plt = pyplot()
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.2))
     levels = np.arange(1, 6)
@@ -306,13 +330,16 @@ def fig_confidence(data: pd.DataFrame, neutral: float):
     a2.axvline(
         means.mean(), color="#33338f", ls="--", lw=1.2, label=f"mean of means {means.mean():.2f}"
     )
+    if truth is not None:
+        a2.axvline(truth, color=TRUTH_COLOR, ls=":", lw=1.6, label=f"simulated truth {truth:.2f}")
     _label(a2, "One value per participant", "participant's mean confidence")
     fig.tight_layout()
     return fig
 
 
-def fig_readability(per_word: pd.DataFrame, data: pd.DataFrame):
-    """Success rate per writer (Wilson CI) and per word, human vs robot."""
+def fig_readability(per_word: pd.DataFrame, data: pd.DataFrame, truth: dict | None = None):
+    """Success rate per writer (Wilson CI) and per word, human vs robot; simulated, the true
+    rate of each writer (``truth``: writer -> rate)."""
     from studies.analysis.stats import proportion_ci
 
     plt = pyplot()
@@ -336,6 +363,9 @@ def fig_readability(per_word: pd.DataFrame, data: pd.DataFrame):
         prates = data[data["writer"] == w].groupby("participant_id")["correct"].mean()
         jitter = np.random.default_rng(i).uniform(-0.12, 0.12, len(prates))
         a1.scatter(i + 0.3 + jitter, prates, s=8, color=colors[w], alpha=0.35)
+        if truth is not None:
+            label = "simulated truth" if i == 0 else None
+            a1.plot([i], [truth[w]], "x", color=TRUTH_COLOR, ms=10, mew=2, label=label)
     a1.set_xticks([0, 1], ["human", "robot"])
     a1.set_xlim(-0.5, 1.7)
     a1.set_ylim(-0.02, 1.02)
@@ -343,7 +373,8 @@ def fig_readability(per_word: pd.DataFrame, data: pd.DataFrame):
         a1,
         "Readability per writer",
         ylabel="success rate (95 % Wilson CI; dots: participants)",
-        legend=False,
+        legend=truth is not None,
+        loc="lower left",
     )
     wide = per_word.pivot_table(index="word", columns="writer", values="rate")
     wide = wide.sort_values(wide.columns[0]) if len(wide.columns) else wide
@@ -360,8 +391,14 @@ def fig_readability(per_word: pd.DataFrame, data: pd.DataFrame):
     return fig
 
 
-def fig_differences(per_part: pd.DataFrame, margin: float, diff: tuple[float, float, float] | None):
-    """Participants' robot-minus-human differences with the equivalence band."""
+def fig_differences(
+    per_part: pd.DataFrame,
+    margin: float,
+    diff: tuple[float, float, float] | None,
+    truth: float | None = None,
+):
+    """Participants' robot-minus-human differences with the equivalence band (and, simulated,
+    the true difference ``truth``)."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 3.0))
     d = per_part["difference"].dropna() if "difference" in per_part else pd.Series(dtype=float)
@@ -374,6 +411,15 @@ def fig_differences(per_part: pd.DataFrame, margin: float, diff: tuple[float, fl
             lo, hi, color="#33338f", alpha=0.25, zorder=3, label="90 % CI of the mean (TOST)"
         )
         ax.axvline(est, color="#33338f", lw=1.8, zorder=4, label=f"mean difference {est:+.3f}")
+    if truth is not None:
+        ax.axvline(
+            truth,
+            color=TRUTH_COLOR,
+            ls=":",
+            lw=1.8,
+            zorder=5,
+            label=f"simulated truth {truth:+.3f}",
+        )
     _label(ax, "Study 2: paired differences", "participant's success rate: robot minus human")
     return fig
 
@@ -386,6 +432,11 @@ def _row(tests: pd.DataFrame, name: str):
     return hit.iloc[0] if len(hit) else None
 
 
+def _truth_column(frame: pd.DataFrame) -> list[str]:
+    """``["truth"]`` when ``frame`` has the simulation's truth beside its estimates, else ``[]``."""
+    return ["truth"] if "truth" in frame else []
+
+
 def _interval(tests: pd.DataFrame, name: str) -> tuple[float, float, float] | None:
     """(estimate, ci_low, ci_high) of the test ``name``; None when it is missing or not estimated."""
     row = _row(tests, name)
@@ -395,7 +446,7 @@ def _interval(tests: pd.DataFrame, name: str) -> tuple[float, float, float] | No
 
 
 def _study1_section(doc: Doc, st: StudyAnalysis) -> None:
-    cfg, c, m = st.config, st.config.chance, st.margin
+    cfg, c, m, truth = st.config, st.config.chance, st.margin, st.truth
     d = st.data
     doc.h(2, "Study 1: Turing-like test")
     doc.p(
@@ -416,14 +467,13 @@ def _study1_section(doc: Doc, st: StudyAnalysis) -> None:
     overall = _interval(st.tests, "GEE rate vs chance")
     doc.figure(
         "turing_per_word.png",
-        _png(fig_turing_words(st.per_word, c, m, overall)),
+        _png(fig_turing_words(st.per_word, c, m, overall, truth and truth.rate)),
         "Rate of picking the robot's sample per word (95 % Wilson CIs, trials independent within a word); "
         "green: chance and the equivalence band; blue: the overall GEE estimate and its 95 % CI.",
     )
-    pw = st.per_word[
-        ["word", "n", "k", "rate", "ci_low", "ci_high", "p_vs_chance", "p_holm", "mean_confidence"]
-    ].copy()
-    for col in ("rate", "ci_low", "ci_high"):
+    columns = ["word", "n", "k", "rate", "ci_low", "ci_high", "p_vs_chance", "p_holm"]
+    pw = st.per_word[[*columns, *_truth_column(st.per_word), "mean_confidence"]].copy()
+    for col in ("rate", "ci_low", "ci_high", *_truth_column(st.per_word)):
         pw[col] = pw[col].map(_num)
     pw["p_vs_chance"] = pw["p_vs_chance"].map(fmt_p)
     pw["p_holm"] = pw["p_holm"].map(fmt_p)
@@ -464,7 +514,7 @@ def _study1_section(doc: Doc, st: StudyAnalysis) -> None:
         )
     doc.figure(
         "turing_confidence.png",
-        _png(fig_confidence(d, cfg.neutral)),
+        _png(fig_confidence(d, cfg.neutral, truth and truth.confidence_mean)),
         "Left: confidence ratings split by whether the robot's sample was picked. Right: participants' mean confidence.",
     )
 
@@ -489,6 +539,7 @@ def _mixed(doc: Doc, mixed: pd.DataFrame, what: str) -> None:
             "term": t["term"],
             "type": t["type"],
             "posterior mean": t["post_mean"].map(_num),
+            **({"truth": t["truth"].map(_num)} if "truth" in t else {}),
             "95 % interval": [f"[{_num(a)}, {_num(b)}]" for a, b in zip(t["ci_low"], t["ci_high"])],
             "as a rate": [
                 f"{_num(r)} [{_num(a)}, {_num(b)}]" if np.isfinite(r) else ""
@@ -510,7 +561,7 @@ def _mixed(doc: Doc, mixed: pd.DataFrame, what: str) -> None:
 
 
 def _study2_section(doc: Doc, st: StudyAnalysis) -> None:
-    m = st.margin
+    m, truth = st.margin, st.truth
     d = st.data
     doc.h(2, "Study 2: readability")
     lists = d["list_id"].replace("", np.nan).dropna().unique() if "list_id" in d else []
@@ -533,20 +584,30 @@ def _study2_section(doc: Doc, st: StudyAnalysis) -> None:
     )
     doc.figure(
         "readability_per_writer.png",
-        _png(fig_readability(st.per_word, d)),
+        _png(
+            fig_readability(
+                st.per_word,
+                d,
+                truth and {"human": truth.human_rate, "robot": truth.robot_rate},
+            )
+        ),
         "Left: success rate per writer (95 % Wilson CI), dots are participants. Right: each word's success rate in both writings.",
     )
     diff = _interval(st.tests, f"paired TOST by participant (±{m:g})")
     doc.figure(
         "readability_differences.png",
-        _png(fig_differences(st.per_participant, m, diff)),
+        _png(
+            fig_differences(
+                st.per_participant, m, diff, truth and truth.robot_rate - truth.human_rate
+            )
+        ),
         f"Participants' robot-minus-human differences; equivalence needs the 90 % CI inside ±{m:g}.",
     )
     pw = st.per_word.copy()
-    for col in ("rate", "ci_low", "ci_high"):
+    for col in ("rate", "ci_low", "ci_high", *_truth_column(pw)):
         pw[col] = pw[col].map(_num)
     doc.table(
-        pw[["word", "writer", "n", "k", "rate", "ci_low", "ci_high"]],
+        pw[["word", "writer", "n", "k", "rate", "ci_low", "ci_high", *_truth_column(pw)]],
         "Per word and writer: k of n typed correctly, rate with 95 % Wilson CI.",
     )
     doc.h(3, "Crossed mixed logit (sensitivity analysis)")
@@ -616,13 +677,64 @@ def _methods(doc: Doc, analysis: Analysis) -> None:
     )
 
 
+ORIGIN_TITLES = {"simulated": " — SIMULATED participants", "pilot": " — PILOT data"}
+
+
+def _origin_banner(doc: Doc, analysis: Analysis) -> None:
+    """Say first that the answers are not people's answers to the study, when they are not."""
+    if analysis.origin == "pilot":
+        doc.banner(
+            "PILOT DATA",
+            "These answers were recorded by a pilot build of the study pages (human samples "
+            "stood in for by copies of the robot's writing): they try out the pages and the "
+            "analysis and say nothing about the robot's handwriting.",
+        )
+    elif analysis.origin == "simulated":
+        from studies.analysis.truth import describe
+
+        known = [
+            f"{st.kind}: {describe(st.truth)} (`{st.truth_path}`)"
+            for st in analysis.studies
+            if st.truth is not None
+        ]
+        missing = [st.kind for st in analysis.studies if st.truth is None]
+        drawn = "drawn by `prg-study simulate`"
+        if known:
+            drawn += (
+                f" from a known truth ({'; '.join(known)}); each estimate below is shown "
+                "beside the true value it should recover."
+            )
+        if missing:
+            drawn += (
+                f"{' The' if known else '; the'} truth of {', '.join(missing)} (its "
+                "`<name>.truth.json`, or `--truth`) was not found, so its estimates cannot be "
+                "compared with it."
+            )
+        doc.banner(
+            "SIMULATED DATA",
+            f"These are simulated participants, not people: {drawn} The verdicts test the "
+            "analysis, not the robot's handwriting.",
+        )
+
+
 def build_report(analysis: Analysis, reproduced: pd.DataFrame | None = None) -> Doc:
     """The report as a :class:`Doc` (render with ``.markdown()`` / ``.html()``)."""
     name = analysis.config.name
     file = Path(analysis.source).name
-    doc = Doc(f"User-study analysis: {name} ({file})" if name else f"User-study analysis: {file}")
+    title = f"User-study analysis: {name} ({file})" if name else f"User-study analysis: {file}"
+    doc = Doc(title + ORIGIN_TITLES.get(analysis.origin, ""))
+    _origin_banner(doc, analysis)
     doc.h(2, "Summary")
     doc.ul([line for st in analysis.studies for line in st.conclusions])
+    for st in analysis.studies:
+        if st.truth is not None:
+            from studies.analysis.truth import headline
+
+            doc.table(
+                headline(st),
+                f"{st.kind}: the main estimates beside the simulation's truth (every table "
+                "below has a truth column too).",
+            )
     doc.h(2, "Data")
     att = analysis.attention
     failed = att.loc[att["failed_any"], "participant_id"].tolist()
@@ -735,6 +847,8 @@ def write_report(analysis: Analysis, out: str | Path, *, paper: bool = True) -> 
             reproduced.to_csv(tmp / "paper_reproduction.csv", index=False)
         metrics = {
             "source": analysis.source,
+            "origin": analysis.origin,
+            "truth": {st.kind: st.truth.to_dict() for st in analysis.studies if st.truth},
             "studies": {st.kind: _jsonable(st.verdict) for st in analysis.studies},
             "warnings": [w for st in analysis.studies for w in st.warnings],
         }

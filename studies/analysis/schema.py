@@ -26,7 +26,8 @@ rt_ms                  float     >= 0, response time in milliseconds; may be emp
 is_attention_check     bool      true for attention-check trials (kept, flagged, not deleted)
 attention_pass         bool      attention-check rows: passed?; empty on other rows
 timestamp              str       ISO 8601 time of the response
-app_version            str       version of the web page that recorded the row
+app_version            str       version of the web page that recorded the row (ends in
+                                 ``-pilot`` from a pilot build; ``simulated`` from the simulator)
 seed                   int       the counterbalancing seed; may be empty
 =====================  ========  ==========================================================
 
@@ -58,6 +59,24 @@ STUDY_ALIASES: dict[str, str] = {
     "study 2": READABILITY,
 }
 WRITERS: tuple[str, ...] = ("human", "robot")
+
+#: ``app_version`` of simulated participants' rows (``prg-study simulate``).
+SIMULATED_VERSION = "simulated"
+#: How a pilot build's ``app_version`` ends (``prg-study build --pilot``).
+PILOT_SUFFIX = "-pilot"
+#: Where a row comes from, by its ``app_version``: people answering a study, a pilot build, or
+#: the simulator. A file holds one of them (the analysis never mixes them).
+ORIGINS: tuple[str, ...] = ("study", "pilot", "simulated")
+
+
+def origin_of(app_version: str) -> str:
+    """The origin (one of :data:`ORIGINS`) of a row with this ``app_version``."""
+    version = str(app_version).strip()
+    if version == SIMULATED_VERSION:
+        return "simulated"
+    return "pilot" if version.endswith(PILOT_SUFFIX) else "study"
+
+
 N_OPTIONS = 5  #: samples shown per study-1 trial (4 human, 1 robot)
 CONFIDENCE_RANGE: tuple[int, int] = (1, 5)
 CONFIDENCE_LABELS: tuple[str, ...] = ("very low", "low", "neutral", "high", "very high")

@@ -22,7 +22,10 @@ from studies.analysis.schema import (
     CONFIDENCE_RANGE,
     FALSE_STRINGS,
     N_OPTIONS,
+    ORIGINS,
+    PILOT_SUFFIX,
     READABILITY,
+    SIMULATED_VERSION,
     STUDY_COLUMNS,
     STUDY_KINDS,
     STUDY_REQUIRED,
@@ -30,6 +33,7 @@ from studies.analysis.schema import (
     TURING,
     kind_from_columns,
     normalise_text,
+    origin_of,
     study_kind,
 )
 
@@ -64,12 +68,16 @@ class Responses:
     notes : list of str
         What the reader did that the report should say (missing optional columns, derived
         values, rows of another study dropped).
+    origin : str
+        Where every row comes from (:data:`~studies.analysis.schema.ORIGINS`): ``study``,
+        ``pilot`` (a pilot build's page) or ``simulated``.
     """
 
     path: str
     frame: pd.DataFrame
     kinds: list[str]
     notes: list[str] = field(default_factory=list)
+    origin: str = "study"
 
 
 def _read_csv(path: str | Path) -> pd.DataFrame:
@@ -409,7 +417,32 @@ def check_responses(
     if problems:
         problems.sort(key=lambda p: p[0])
         raise ResponseFileError(name, [f"line {line}: {text}" for line, text in problems])
-    return Responses(path=name, frame=out, kinds=kinds, notes=notes)
+    origin = _one_origin(df, name)
+    return Responses(path=name, frame=out, kinds=kinds, notes=notes, origin=origin)
+
+
+def _one_origin(df: pd.DataFrame, name: str) -> str:
+    """The origin all rows share (by ``app_version``); a mixture raises ResponseFileError."""
+    if "app_version" not in df:
+        return "study"
+    origins = df["app_version"].map(origin_of)
+    found = [o for o in ORIGINS if (origins == o).any()]
+    if len(found) == 1:
+        return found[0]
+    where = {"study": "the study's page", "pilot": "a pilot build", "simulated": "the simulator"}
+    parts = [
+        f"{int((origins == o).sum())} rows from {where[o]} "
+        f"(first on line {int(df.loc[origins == o, 'line'].iloc[0])})"
+        for o in found
+    ]
+    raise ResponseFileError(
+        name,
+        [
+            f"mixes {' and '.join(parts)}: never analysed together; analyse each in its own "
+            f"file (app_version {SIMULATED_VERSION!r}: the simulator; ending {PILOT_SUFFIX!r}: "
+            "a pilot build; any other: the study)"
+        ],
+    )
 
 
 def attention_summary(frame: pd.DataFrame) -> pd.DataFrame:

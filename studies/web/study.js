@@ -14,6 +14,10 @@
  * Responses: one CSV row per trial with exactly config.columns; downloaded and/or POSTed
  * (as text/plain: no CORS preflight) to config.save.post_url; then the completion code is shown and the page
  * redirects to config.completion.redirect_url.
+ * A pilot build (config.pilot) has its PILOT banner in index.html above every screen, names its
+ * download PILOT_...; a not-ready build links its pilot copy (config.pilot_copy) when it has one.
+ * Trial screens set body.trial-turing / body.trial-readability: study.css fits them to a large
+ * window (no scrolling at 1280x800) and lets a phone scroll down, never sideways.
  */
 (function () {
   "use strict";
@@ -25,7 +29,10 @@
   var el = page.el;
 
   // ------------------------------------------------------------------ small helpers
-  function show(nodes) {
+  // `screen` names the screen's layout (study.css): "trial-turing" and "trial-readability" fit
+  // the window on a large screen; the others flow.
+  function show(nodes, screen) {
+    document.body.className = screen || "";
     page.show(app, nodes);
     window.scrollTo(0, 0);
   }
@@ -111,10 +118,22 @@
   // ------------------------------------------------------------------ screens
   function notReady() {
     var items = (cfg.missing || []).map(function (m) { return el("li", { text: m }); });
+    var pilot = [
+      "To try the pages before then, use a PILOT copy (stand-in human samples made from the " +
+      "robot's; never for data), built with prg-study build --pilot",
+    ];
+    if (cfg.pilot_copy) {
+      pilot[0] += " beside this folder: ";
+      pilot.push(el("a", { href: cfg.pilot_copy, id: "pilot-copy", text: cfg.pilot_copy }));
+      pilot.push(" (the demo builds it).");
+    } else {
+      pilot[0] += ".";
+    }
     show([
       el("h1", { text: cfg.title }),
       el("p", { class: "error", id: "not-ready", text: "This study is not ready to run yet." }),
       el("ul", {}, items),
+      el("p", { class: "note", id: "pilot-hint" }, pilot),
     ]);
   }
 
@@ -130,12 +149,12 @@
         el("p", { id: "declined", text: "You did not agree to take part; no answers were recorded. You may close this page." }),
       ]);
     });
-    show((cfg.pilot ? [pilotBanner()] : []).concat([
+    show([
       el("h1", { text: cfg.title }),
       el("p", { id: "consent-text", text: cfg.consent }),
       el("label", { class: "check", for: "consent-agree" }, [box, el("span", { text: "I have read the above and agree to take part." })]),
       el("div", { class: "actions" }, [go, no]),
-    ]));
+    ]);
   }
 
   function preload(trials) {
@@ -190,15 +209,9 @@
     };
   }
 
-  function pilotBanner() {
-    return el("p", { class: "instruction", id: "pilot-banner",
-      text: "Pilot build: the human samples are stand-ins made from the robot's. Do not collect data with it." });
-  }
-
   function header(trial, index) {
     var total = state.row.trials.length;
     var nodes = [el("p", { class: "progress", id: "progress", text: "Trial " + (index + 1) + " of " + total })];
-    if (cfg.pilot) nodes.unshift(pilotBanner());
     if (trial.is_attention_check && trial.instruction) {
       nodes.push(el("p", { class: "instruction", id: "check-instruction", text: trial.instruction }));
     }
@@ -260,12 +273,14 @@
     show(header(trial, index).concat([
       el("h2", { text: "Which sample of \u201c" + trial.word + "\u201d did the robot write?" }),
       el("div", { class: "options", role: "group", "aria-label": "samples" }, options),
-      el("fieldset", { class: "confidence" }, [
-        el("legend", { text: "How confident are you?" }),
-        el("div", { class: "scale" }, scale),
+      el("div", { class: "respond" }, [
+        el("fieldset", { class: "confidence" }, [
+          el("legend", { text: "How confident are you?" }),
+          el("div", { class: "scale" }, scale),
+        ]),
+        el("div", { class: "actions" }, [next]),
       ]),
-      el("div", { class: "actions" }, [next]),
-    ]));
+    ]), "trial-turing");
   }
 
   function readabilityTrial(trial, index) {
@@ -303,14 +318,14 @@
       el("div", { class: "single" }, [el("img", { src: trial.stimuli[0], alt: "handwritten word", draggable: "false" })]),
       el("p", {}, [input]),
       el("div", { class: "actions" }, [next, cannot]),
-    ]));
+    ]), "trial-readability");
     input.focus();
   }
 
   // ------------------------------------------------------------------ saving and completion
   function fileName() {
     var who = state.participant_id.replace(/[^A-Za-z0-9_-]/g, "_").slice(0, 64);
-    return cfg.name + "_" + who + "_" + page.fileStamp() + ".csv";
+    return (cfg.pilot ? "PILOT_" : "") + cfg.name + "_" + who + "_" + page.fileStamp() + ".csv";
   }
 
   function download(csv) {

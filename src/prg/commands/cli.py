@@ -20,6 +20,13 @@ first is being handled ends the process at once.
 
 Tasks call :func:`check_output` on every output path before they start working, so a path that
 cannot be written is a usage error (exit 2) before anything is computed or written.
+
+The project root (``paths.root_dir``: data, models, reports, outputs, logs, the MLflow store) is
+:func:`project_root`, through the ``${prg.root:}`` resolver, so a command works the same from
+any folder and writes nothing into the working folder unless asked. The command line is checked
+(keys, numeric ranges, choices, :mod:`prg.checks`) before the command's task runs; a command
+module that imports its heavy libraries (torch, Lightning, MLflow ...) inside its task, as
+``prg-write`` does, answers a bad command line before loading them.
 """
 
 from __future__ import annotations
@@ -27,6 +34,7 @@ from __future__ import annotations
 import errno
 import logging
 import os
+import re
 import sys
 import tempfile
 from collections.abc import Callable, Iterator
@@ -34,9 +42,66 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+import tomllib
+from omegaconf import OmegaConf
+
+from prg.checks import check_values, unknown_key
 from prg.errors import PRGError, UsageError
 from prg.resources import config_dir
 from prg.signals import Interrupted, hold, raising_signals, release, stop_children
+
+ROOT_ENV = "PRG_ROOT"
+
+
+def is_project_root(folder: Path) -> bool:
+    """Whether ``folder`` is a checkout of this project: ``dvc.yaml`` (the pipeline whose outputs
+    live under it) next to a ``pyproject.toml`` whose ``[project]`` is named ``prg`` (a
+    ``dvc.yaml`` alone would also match other DVC projects)."""
+    if not (folder / "dvc.yaml").is_file():
+        return False
+    try:
+        with (folder / "pyproject.toml").open("rb") as file:
+            project = tomllib.load(file).get("project")
+    except (OSError, tomllib.TOMLDecodeError):
+        return False
+    return isinstance(project, dict) and project.get("name") == "prg"
+
+
+def project_root() -> tuple[Path, str]:
+    """The project root (absolute) and where it came from, in this order:
+
+    1. ``PRG_ROOT``, when set;
+    2. the nearest folder from the working folder upward that is a checkout of the project
+       (:func:`is_project_root`);
+    3. the checkout the running code is installed from (an editable install, ``make setup``);
+    4. ``$XDG_DATA_HOME/prg`` (``~/.local/share/prg``).
+
+    Never the working folder itself by default: nothing is written there unless asked.
+    """
+    given = os.environ.get(ROOT_ENV)
+    if given:
+        return Path(given).expanduser().absolute(), ROOT_ENV
+    here = Path.cwd()
+    for folder in (here, *here.parents):
+        if is_project_root(folder):
+            return folder, "found above the working folder"
+    code = Path(__file__).resolve().parents[3]  # <checkout>/src/prg/commands/cli.py
+    if is_project_root(code):
+        return code, "the code's checkout, no project above the working folder"
+    data = Path(os.environ.get("XDG_DATA_HOME") or Path.home() / ".local/share") / "prg"
+    return data, "the default, no project above the working folder"
+
+
+def describe_root(root_dir: str | os.PathLike) -> str:
+    """``project root <root_dir>: <where it came from>``, for messages about missing inputs."""
+    root, origin = project_root()
+    if Path(root_dir).absolute() != root:
+        origin = "paths.root_dir"
+    return f"project root {Path(root_dir).absolute()}: {origin}"
+
+
+# conf/paths/default.yaml: ``root_dir: ${prg.root:}``; cached per config, so one run sees one root
+OmegaConf.register_new_resolver("prg.root", lambda: str(project_root()[0]), use_cache=True)
 
 
 def fail(command: str, message: str, code: int) -> None:
@@ -172,7 +237,9 @@ def _unresolvable(cfg: Any, overrides: list[str]) -> str | None:
 
 
 def _preflight(command: str, config_name: str, argv: list[str]) -> None:
-    """Compose the command line once; report a bad override as one line (exit 2).
+    """Compose the command line once; report a bad override as one line (exit 2): an unknown
+    key or config-group option (naming the accepted ones), an unresolvable interpolation, a
+    number out of its range or an unknown choice (:func:`prg.checks.check_values`).
 
     Also refuses a Hydra log folder (``hydra.run.dir``, under ``paths.log_dir``) that cannot be
     created, which Hydra itself would report with a traceback. Skipped when Hydra's own flags
@@ -193,19 +260,48 @@ def _preflight(command: str, config_name: str, argv: list[str]) -> None:
     try:
         cfg = compose_config(config_name, overrides, hydra_config=True)
     except Exception as err:  # Hydra raises several types; all mean a bad override
-        message = " ".join(str(err).split())
-        cut = message.find("Set the environment variable HYDRA_FULL_ERROR")
-        message = (message[:cut] if cut > 0 else message).strip()
-        if "LexerNoViableAlt" in message or "mismatched input" in message:
-            message += " (a value with spaces, commas or symbols needs Hydra quotes: 'key=\"...\"')"
-        fail(command, message, 2)
+        fail(command, _composition_error(err, config_name, overrides), 2)
     unresolved = _unresolvable(cfg, overrides)
     if unresolved:
         fail(command, unresolved, 2)
     try:
+        check_values(OmegaConf.masked_copy(cfg, [key for key in cfg if key != "hydra"]))
         check_output(cfg.hydra.run.dir, "Hydra's log folder (paths.log_dir)")
     except UsageError as err:
         fail(command, str(err), 2)
+
+
+# Hydra's message for an unknown option of a config group (``model=musee``), whitespace joined
+_MISSING_OPTION = re.compile(
+    r"Could not find '(.+)/([^/']+)' Available options in '[^']*': (.*?)(?: Config search path|$)"
+)
+
+
+def _composition_error(err: Exception, config_name: str, overrides: list[str]) -> str:
+    """One line for a command line that does not compose: an unknown key (with the accepted
+    ones), an unknown option of a config group (with the options), or Hydra's own message."""
+    from omegaconf.errors import OmegaConfBaseException
+
+    message = " ".join(str(err).split())
+    cause = err.__cause__
+    if message.startswith("Could not override") and isinstance(cause, OmegaConfBaseException):
+        key = cause.full_key  # the unknown key; Hydra's advice (+key=) would add an unused one
+        others = [o for o in overrides if o.partition("=")[0] != key]
+        try:
+            known = OmegaConf.to_container(compose_config(config_name, others))
+        except Exception:  # another override is bad too: Hydra's message
+            known = None
+        if key and isinstance(known, dict):
+            return unknown_key(key, known)
+    group = _MISSING_OPTION.search(message)
+    if group:
+        options = [o for o in group.group(3).split() if not o.startswith("_")]  # _base_ files
+        return f"unknown {group.group(1)} {group.group(2)}; accepted: {', '.join(options)}"
+    cut = message.find("Set the environment variable HYDRA_FULL_ERROR")
+    message = (message[:cut] if cut > 0 else message).strip()
+    if "LexerNoViableAlt" in message or "mismatched input" in message:
+        message += " (a value with spaces, commas or symbols needs Hydra quotes: 'key=\"...\"')"
+    return message
 
 
 @contextmanager
@@ -279,9 +375,11 @@ __all__ = [
     "check_output",
     "compose_config",
     "config_dir",
+    "describe_root",
     "fail",
     "handle_signals",
     "hydra_command",
     "os_error_message",
+    "project_root",
     "route_library_logs",
 ]

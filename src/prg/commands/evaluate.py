@@ -46,7 +46,7 @@ from prg.evaluation.settings import (
 )
 from prg.files import staged_outputs, write_json, write_text
 from prg.resources import git_commit
-from prg.tracking import TaskRun, task_run
+from prg.tracking import TaskRun, experiment_of, metric_name, task_run
 
 log = logging.getLogger(__name__)
 
@@ -140,11 +140,11 @@ def _write_reports(result, models, test, settings, report_dir: Path, cfg: DictCo
 
 def _log_run(run: TaskRun, result: Evaluation, models: dict[str, LoadedModel], cfg) -> None:
     """Metrics into each model's training run (when in this store: else a ``<name>-evaluate``
-    run) and into this ``evaluate`` run, with the config and the reports as artifacts."""
+    run in the training experiment) and into this ``evaluate`` run, with the config and the
+    reports as artifacts; modalities named by the paper's letters (``classifier/T/...``)."""
     from mlflow.exceptions import MlflowException
 
     client = run.client
-    experiment = client.get_run(run.run_id).info.experiment_id
     for name, (model, info, path) in models.items():
         metrics = {
             k.split("/", 1)[1]: v for k, v in result.metrics.items() if k.startswith(f"{name}/")
@@ -155,13 +155,14 @@ def _log_run(run: TaskRun, result: Evaluation, models: dict[str, LoadedModel], c
                 raise MlflowException("no run id in the checkpoint")
             client.get_run(run_id)
         except MlflowException:
+            experiment = experiment_of(client, cfg, tasks=False)  # beside the training runs
             run_id = client.create_run(
                 experiment, run_name=f"{name}-evaluate", tags={"prg.family": model.family}
             ).info.run_id
             client.set_terminated(run_id)
         TaskRun(client, run_id).log_metrics(metrics, prefix="test/")
         client.set_tag(run_id, "prg.evaluated_checkpoint", str(path))
-    run.log_metrics(result.metrics, prefix="test/")
+    run.log_metrics({metric_name(k): v for k, v in result.metrics.items()}, prefix="test/")
     run.log_text(OmegaConf.to_yaml(cfg, resolve=True), "config/config.yaml")
     run.log_artifacts(result.report_dir, "reports")
 

@@ -2,7 +2,7 @@
 
 Examples
 --------
-``prg-export word=outputs/write/write-muse/word.json``               every format
+``prg-export word=outputs/write/muse/hello-20261202-120000/word.json``               every format
 ``prg-export word=word.json formats=[gcode] gcode.pen=servo``        GRBL pen plotter, servo pen
 ``prg-export word=word.json formats=[hpgl] hpgl.device=hp7440a``
 ``prg-export word=word.json formats=[mcap,csv] robot=iiwa tempo=2``  ROS 2 MCAP and CSV
@@ -31,6 +31,7 @@ from prg.checks import check_values
 from prg.commands.cli import check_output, hydra_command
 from prg.commands.settings import node
 from prg.errors import SettingsError, UsageError
+from prg.files import folder_fields, word_folder
 from prg.pipeline.word import WordTrajectory
 
 log = logging.getLogger(__name__)
@@ -87,9 +88,11 @@ def export(cfg: DictConfig) -> tuple[Any, Path]:
     if cfg.word is None:
         raise UsageError("nothing to export: give word=WORD.json (written by prg-write)")
     settings = export_settings(cfg)
-    out_dir = check_output(cfg.out_dir, "out_dir")
+    folder_fields(cfg.out_dir)
+    check_output(cfg.out_dir, "out_dir")
     word = WordTrajectory.from_json(Path(cfg.word))
-    result = export_word(word, settings, out_dir)
+    with word_folder(cfg.out_dir, word.text) as out_dir:
+        result = export_word(word, settings, out_dir)
     robot = result.metadata.get("robot")
     if robot is not None:
         log.info(

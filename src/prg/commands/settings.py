@@ -16,16 +16,14 @@ from typing import TYPE_CHECKING, Any
 from omegaconf import DictConfig, OmegaConf
 
 from prg.checks import literal_words
+from prg.commands.cli import describe_root
 from prg.errors import SettingsError, UsageError
-from prg.pipeline.compose import GenerateSettings
-from prg.pipeline.connect import ConnectionSettings
-from prg.pipeline.layout import LayoutSettings
-from prg.pipeline.marks import MarkSettings
-from prg.pipeline.speech import SpeechSettings
-from prg.writer import Writer
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # imported where used: a bad command line is answered before numpy and torch
+    from prg.pipeline.compose import GenerateSettings
+    from prg.pipeline.speech import SpeechSettings
     from prg.sim import RobotSettings, SimSettings
+    from prg.writer import Writer
 
 MAX_LEXICON_BYTES = 1_000_000  # a word list, not a dictionary dump: about 100,000 words
 
@@ -47,6 +45,11 @@ def build(cls: type, values: dict[str, Any], key: str, **extra: Any) -> Any:
 
 def generate_settings(cfg: DictConfig) -> GenerateSettings:
     """``generate``, ``layout`` and ``connection`` as :class:`GenerateSettings`."""
+    from prg.pipeline.compose import GenerateSettings
+    from prg.pipeline.connect import ConnectionSettings
+    from prg.pipeline.layout import LayoutSettings
+    from prg.pipeline.marks import MarkSettings
+
     connection = node(cfg, "connection")
     degrees = connection.pop("alpha_max_deg")
     if isinstance(degrees, bool) or not isinstance(degrees, int | float):
@@ -91,6 +94,8 @@ def read_lexicon(path: Path) -> list[str]:
 
 def speech_settings(cfg: DictConfig) -> SpeechSettings:
     """``speech`` as :class:`SpeechSettings`; ``lexicon`` may name a text file of words."""
+    from prg.pipeline.speech import SpeechSettings
+
     settings = node(cfg, "speech")
     lexicon = settings.get("lexicon")
     if isinstance(lexicon, str):
@@ -101,16 +106,30 @@ def speech_settings(cfg: DictConfig) -> SpeechSettings:
 
 
 def checkpoint_path(cfg: DictConfig) -> Path:
-    """``ckpt``, or the exported model of ``family`` under ``models_dir``."""
-    return Path(cfg.ckpt) if cfg.ckpt else Path(cfg.models_dir) / cfg.family / "model.ckpt"
+    """``ckpt``, or the exported model of ``family`` under ``models_dir``; a file that does not
+    exist is refused naming its absolute path and how to point elsewhere."""
+    if cfg.ckpt:
+        path = Path(cfg.ckpt)
+        if not path.exists():
+            raise UsageError(f"ckpt={cfg.ckpt}: {path.absolute()} does not exist")
+        return path
+    path = Path(cfg.models_dir) / cfg.family / "model.ckpt"
+    if not path.exists():
+        raise UsageError(
+            f"checkpoint {path.absolute()} does not exist: no {cfg.family} model under "
+            f"models_dir ({describe_root(cfg.paths.root_dir)}); give ckpt=FILE, "
+            "PRG_ROOT=FOLDER for another project, or train it there (`make demo`)"
+        )
+    return path
 
 
 def writer_from_config(cfg: DictConfig) -> Writer:
     """The :class:`~prg.writer.Writer` of a write config: its checkpoint and settings."""
+    from prg.writer import Writer
+
+    path = checkpoint_path(cfg)  # before the settings: a missing model is answered first
     generate, speech = generate_settings(cfg), speech_settings(cfg)
-    return Writer.from_checkpoint(
-        checkpoint_path(cfg), settings=generate, speech=speech, on_unknown=cfg.on_unknown
-    )
+    return Writer.from_checkpoint(path, settings=generate, speech=speech, on_unknown=cfg.on_unknown)
 
 
 def simulation_settings(cfg: DictConfig) -> tuple[RobotSettings, SimSettings]:

@@ -3,7 +3,7 @@
 Examples
 --------
 ``prg-simulate text=joy``                          runs ``prg-write`` first (MUSE), Panda arm
-``prg-simulate word=outputs/write/write-muse/word.json robot=iiwa``
+``prg-simulate word=outputs/write/muse/joy-20250101-120000/word.json robot=iiwa``
 ``prg-simulate text="hello world" scale=0.8 progress=false mlflow=false``
 ``prg-simulate text=joy gui=true``                 PyBullet's GUI (needs a display)
 
@@ -15,12 +15,14 @@ with the pen down at the DMP's tempo, lift between words and retreat at the end
 (:func:`prg.sim.simulate_word`). A word that does not fit the arm's reachable workspace on the
 paper is refused with one line giving the size that fits.
 
-Writes into ``out_dir`` (atomically, through a staging folder): ``ink.png`` and ``ink.svg`` (the
-ink, true to scale), ``page.png`` (a TinyRenderer camera picture of the page), ``joints.csv`` and
-``joints.npz`` (the joint trajectory, pen tip and ink per physics step), ``metrics.json``
-(tracking error mean/max in mm between commanded and inked path, longest ink gap, simulated and
-wall time, their ratio, robot, word size), ``sim.rrd`` (Rerun: ``rerun sim.rrd``) and ``word/``
-(the word written); with ``mlflow=true`` an MLflow run (tag ``prg.task=simulate``) holding them.
+Writes into ``out_dir`` (atomically, through a staging folder; by default a new folder per run,
+``outputs/simulate/<robot>/<text>-<YYYYmmdd-HHMMSS>``, :func:`prg.files.word_folder`):
+``ink.png`` and ``ink.svg`` (the ink, true to scale), ``page.png`` (a TinyRenderer camera picture
+of the page), ``joints.csv`` and ``joints.npz`` (the joint trajectory, pen tip and ink per physics
+step), ``metrics.json`` (tracking error mean/max in mm between commanded and inked path, longest
+ink gap, simulated and wall time, their ratio, robot, word size), ``sim.rrd`` (Rerun:
+``rerun sim.rrd``) and ``word/`` (the word written); with ``mlflow=true`` an MLflow run (tag
+``prg.task=simulate``) holding them.
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ from prg.checks import check_values, literal_text
 from prg.commands.cli import check_output, hydra_command
 from prg.commands.settings import simulation_settings, writer_from_config
 from prg.errors import UsageError
-from prg.files import staged_outputs
+from prg.files import folder_fields, staged_outputs, word_folder
 from prg.pipeline.word import WordTrajectory
 from prg.recording import record_simulation
 from prg.tracking import task_run
@@ -70,7 +72,8 @@ def simulate(cfg: DictConfig) -> tuple[Any, Path]:
             "(prg-write runs first; also audio=, images=, trajectories=)"
         )
     robot, settings = simulation_settings(cfg)
-    out_dir = check_output(cfg.out_dir, "out_dir")
+    folder_fields(cfg.out_dir)
+    check_output(cfg.out_dir, "out_dir")
     given = None
     if cfg.word is not None:
         given = Path(cfg.word)
@@ -80,11 +83,15 @@ def simulate(cfg: DictConfig) -> tuple[Any, Path]:
         writer = writer_from_config(cfg)
     tags = {"prg.robot": robot.name}
     with task_run(cfg, "simulate", tags, enabled=cfg.mlflow) as run:
-        with staged_outputs(out_dir, owned=(*OUTPUTS, "sim.rrd", "word")) as staging:
+        if given is None:
+            written = writer.write(text, cfg.audio, cfg.images, cfg.trajectories)
+            word = written.word
+        with (
+            word_folder(cfg.out_dir, word.text) as out_dir,
+            staged_outputs(out_dir, owned=(*OUTPUTS, "sim.rrd", "word")) as staging,
+        ):
             if given is None:
-                written = writer.write(text, cfg.audio, cfg.images, cfg.trajectories)
                 written.save(staging / "word", record=cfg.record)
-                word = written.word
             else:
                 (staging / "word").mkdir()
                 shutil.copyfile(given, staging / "word" / "word.json")

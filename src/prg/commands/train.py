@@ -12,9 +12,15 @@ Resuming after a crash or a kill: ``ckpt_path=last`` resolves to ``${checkpoint_
 ``callbacks.last.every_n_train_steps`` steps inside an epoch, at the end of each epoch and at the
 end of training (:class:`prg.training.callbacks.LastCheckpoint`), so a kill loses at most that many steps.
 The resumed run finishes the interrupted epoch's remaining batches, continues the same MLflow
-run (its id travels in the checkpoint) and marks it FINISHED at the end. Metrics are logged once
-per epoch, at the epoch's last step, so the run's history has each epoch once (see
-``LastCheckpoint`` for the one sub-second window where a kill leaves an epoch's ``val/*`` twice).
+run (its id travels in the checkpoint) and marks it FINISHED at the end. The epoch means
+``train/*`` and ``val/*`` are logged once per epoch, at the epoch's last step, so the run's
+history has each epoch once (see ``LastCheckpoint`` for the one sub-second window where a kill
+leaves an epoch's ``val/*`` twice); ``train_steps/*`` are the means over each
+``trainer.log_every_n_steps`` steps (:class:`prg.training.callbacks.StepMeans`).
+
+The run goes to the experiment ``logger.experiment_name`` with a description (the family,
+profile, data and command line, :func:`run_description`); its page in the MLflow UI is logged
+at the end.
 """
 
 from __future__ import annotations
@@ -40,7 +46,15 @@ from prg.files import sha256_file, staged_outputs, write_json
 from prg.models.checkpoint import read_checkpoint
 from prg.models.module import PRGModule
 from prg.resources import git_commit
-from prg.tracking import PARENT_ENV, artifact_location, flatten, tracking_uri
+from prg.tracking import (
+    DESCRIPTION_TAG,
+    PARENT_ENV,
+    artifact_location,
+    command_line,
+    flatten,
+    runs_page,
+    tracking_uri,
+)
 from prg.training.settings import TrainSettings
 
 log = logging.getLogger(__name__)
@@ -117,6 +131,23 @@ def _resolve_ckpt_path(cfg: DictConfig) -> str | None:
     return str(last)
 
 
+def run_description(cfg: DictConfig, manifest: dict[str, Any], manifest_hash: str) -> str:
+    """The MLflow description of a training run (Markdown): what, on which data, how to rerun."""
+    from prg.evaluation.reports import title
+
+    every = cfg.trainer.get("log_every_n_steps")
+    return "  \n".join(
+        [
+            f"**{title(cfg.model.name)}** (`{cfg.model.name}`) training, profile "
+            f"`{cfg.get('profile') or 'default'}`, seed {cfg.seed}",
+            f"Data: `{cfg.data.name}` ({manifest['source']}, manifest sha256 {manifest_hash[:12]})",
+            f"Command: `{command_line('prg-train')}`",
+            f"Curves: `train/*`, `val/*` per epoch, `train_steps/*` every {every} steps; "
+            "compare families on `val/nll_per_dim_T`",
+        ]
+    )
+
+
 def train(cfg: DictConfig) -> TrainResult:
     """Task: fit ``cfg.model`` on ``cfg.data`` with MLflow tracking and fixed-path checkpoints."""
     # mlflow.set_tracking_uri (called by Lightning's logger) exports MLFLOW_TRACKING_URI; keep
@@ -163,6 +194,7 @@ def _train(cfg: DictConfig) -> TrainResult:
         "prg.git_commit": git_commit(),
         "prg.experiment": str(cfg.get("profile") or "default"),
         "prg.seed": str(cfg.seed),
+        DESCRIPTION_TAG: run_description(cfg, manifest, manifest_hash),
     }
     if os.environ.get(PARENT_ENV):
         tags["mlflow.parentRunId"] = os.environ[PARENT_ENV]
@@ -198,6 +230,8 @@ def _train(cfg: DictConfig) -> TrainResult:
     last = next((str(c.path) for c in callbacks if isinstance(c, LastCheckpoint)), "")
     if cfg.get("export_dir") and best and trainer.is_global_zero:  # DDP: rank 0 only
         _export(Path(cfg.export_dir), best, metrics, logger.run_id, cfg)
+    if trainer.is_global_zero:
+        log.info("MLflow run %s: %s", logger.run_id, runs_page(logger.experiment_id))
     return TrainResult(module, trainer, metrics, logger.run_id, best, last)
 
 

@@ -15,8 +15,10 @@ channel; ``trajectories`` (a JSON file of per-letter pen strokes) is the T chann
 
 Writes ``word.json`` (points, segments, text, timing, DMP), ``word.png``, ``word.svg`` and
 ``dmp_rollout.csv``, ``motion.csv`` into ``out_dir`` (atomically, through a staging folder) and, with
-``mlflow=true``, an MLflow run holding them. The work is :class:`prg.writer.Writer`'s; this module
-reads the config and saves the outputs.
+``mlflow=true``, an MLflow run holding them. By default every word gets a new folder,
+``outputs/write/<family>/<text>-<YYYYmmdd-HHMMSS>`` (``-2`` ... appended if it exists);
+``out_dir=FOLDER`` names the folder (:func:`prg.files.word_folder`). The work is
+:class:`prg.writer.Writer`'s; this module reads the config and saves the outputs.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from omegaconf import DictConfig
 
@@ -32,7 +34,9 @@ from prg.checks import check_values, literal_text
 from prg.commands.cli import check_output, hydra_command
 from prg.commands.settings import checkpoint_path, writer_from_config
 from prg.tracking import task_run
-from prg.writer import Writer, WriteResult
+
+if TYPE_CHECKING:  # torch: imported by the task, once the command line is checked
+    from prg.writer import Writer, WriteResult
 
 log = logging.getLogger(__name__)
 
@@ -40,13 +44,17 @@ log = logging.getLogger(__name__)
 def write(cfg: DictConfig) -> tuple[WriteResult, Path]:
     """Task: write the word given through the config's channels and save it, its renderings and
     its DMP rollout (and an MLflow run)."""
+    from prg.files import folder_fields, word_folder
+
     check_values(cfg)
     text = literal_text(cfg.text, "text")
-    out_dir = check_output(cfg.out_dir, "out_dir")
+    folder_fields(cfg.out_dir)
+    check_output(cfg.out_dir, "out_dir")
     writer = writer_from_config(cfg)
     with task_run(cfg, "write", {"prg.family": writer.family}, enabled=cfg.mlflow) as run:
         result = writer.write(text, cfg.audio, cfg.images, cfg.trajectories)
-        result.save(out_dir, record=cfg.record)
+        with word_folder(cfg.out_dir, result.word.text) as out_dir:
+            result.save(out_dir, record=cfg.record)
         word = result.word
         log.info(
             "wrote %r with %s in %.0f ms: %d points, %.1f cm, %.1f s, DMP %d bases, "

@@ -6,11 +6,13 @@ Modules
     :func:`recording_stream`: an explicit stream saving to a file atomically (a reader never
     sees half a file, an error leaves nothing behind). ``rerun FILE.rrd`` opens the result.
 :mod:`prg.recording.read`
-    :func:`read_entities`, :func:`recording_summary`, :func:`read_times` and
-    :func:`read_component` read a file back (the tests use them).
+    :func:`read_entities`, :func:`recording_summary`, :func:`read_times`,
+    :func:`read_component` and :func:`read_views` (the default blueprint's views) read a file
+    back (the tests use them).
 :mod:`prg.recording.views`
     What both recordings share in the viewer: the y-flip of 2D positions (:data:`Y_SIGN`),
-    :func:`framing`, animated points and growing paths.
+    the framing of views on their data (:func:`framing`, :func:`framing_eye`), animated points
+    and growing paths.
 :mod:`prg.recording.audio`
     Audio as a 16-bit PCM WAV (:func:`wav_bytes`) and its min/max envelope
     (:func:`waveform_envelope`).
@@ -28,7 +30,13 @@ from __future__ import annotations
 
 from prg.plotting import distinct_colours
 from prg.recording.audio import wav_bytes, waveform_envelope
-from prg.recording.read import read_component, read_entities, read_times, recording_summary
+from prg.recording.read import (
+    read_component,
+    read_entities,
+    read_times,
+    read_views,
+    recording_summary,
+)
 from prg.recording.simulation import (
     SIM_TIMELINE,
     record_simulation,
@@ -36,7 +44,7 @@ from prg.recording.simulation import (
     sim_blueprint,
 )
 from prg.recording.stream import FLUSH_TIMEOUT_S, recording_stream
-from prg.recording.views import Y_SIGN, framing
+from prg.recording.views import Y_SIGN, framing, framing_eye
 from prg.recording.word import (
     AUDIO_TIMELINE,
     DECODED_SPACING,
@@ -58,6 +66,7 @@ __all__ = [
     "Y_SIGN",
     "distinct_colours",
     "framing",
+    "framing_eye",
     "log_audio",
     "log_decoded",
     "log_rollout",
@@ -65,6 +74,7 @@ __all__ = [
     "read_component",
     "read_entities",
     "read_times",
+    "read_views",
     "record_simulation",
     "record_write",
     "recording_stream",

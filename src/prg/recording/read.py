@@ -10,6 +10,7 @@ import os
 from collections import defaultdict
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import rerun as rr
@@ -19,15 +20,19 @@ from prg.errors import UsageError
 _INTERNAL_ENTITY_PREFIX = "__"  # Rerun's own entities (recording properties)
 
 
-def _chunks(path: str | os.PathLike) -> Iterator:
-    """The chunks of the first recording store in ``path`` (blueprints not included)."""
+def _chunks(path: str | os.PathLike, blueprint: bool = False) -> Iterator:
+    """The chunks of the first recording store in ``path`` (or of its first blueprint)."""
     from rerun.chunk import RrdReader
 
     path = Path(path)
     if not path.is_file():
         raise UsageError(f"{path}: no such recording file")
     try:
-        chunks = list(RrdReader(path).stream().to_chunks())
+        reader = RrdReader(path)
+        stores = reader.blueprints() if blueprint else [None]
+        if not stores:
+            raise ValueError("it holds no blueprint")
+        chunks = list(reader.stream(store=stores[0]).to_chunks())
     except (OSError, ValueError, RuntimeError) as err:
         raise UsageError(f"{path}: not a readable Rerun recording ({err})") from None
     yield from chunks
@@ -159,3 +164,37 @@ def read_component(
     if timeline is not None:
         timed.sort(key=lambda row: row[:2])
     return static + [value for _, _, value in timed]
+
+
+def read_views(path: str | os.PathLike) -> dict[str, dict[str, Any]]:
+    """The views of a recording's default blueprint and their settings, by display name.
+
+    Returns
+    -------
+    dict of str to dict of str to object
+        View name (``"Joint angles (rad)"``) to ``"class"`` (``"3D"``, ``"2D"``,
+        ``"TimeSeries"`` ...), ``"origin"`` and each setting the blueprint gives it as
+        ``"Archetype:field"`` with its value as Python data: ``"EyeControls3D:position"`` (a
+        list of 3 floats), ``"VisualBounds2D:range"`` (``{"x_range": [lo, hi], "y_range":
+        ...}``), ``"PlotLegend:corner"`` (:class:`rerun.blueprint.Corner2D`'s value),
+        ``"TimeAxis:view_range"`` (``{"start": ns, "end": ns}``) ...
+
+    Raises
+    ------
+    UsageError
+        If the file is missing, not a Rerun recording or has no blueprint.
+    """
+    names = {"ViewBlueprint:display_name": "name", "ViewBlueprint:class_identifier": "class"}
+    names["ViewBlueprint:space_origin"] = "origin"
+    views: dict[str, dict[str, Any]] = defaultdict(dict)
+    for chunk in _chunks(path, blueprint=True):
+        parts = chunk.entity_path.strip("/").split("/")
+        if parts[0] != "view" or len(parts) > 3:  # settings, not containers or overrides
+            continue
+        batch = chunk.to_record_batch()
+        for field in batch.schema:
+            if (field.metadata or {}).get(rr.RERUN_KIND) != b"data":
+                continue
+            value = batch.column(field.name).to_pylist()[-1][0]
+            views[parts[1]][names.get(field.name, field.name)] = value
+    return {view.pop("name"): view for view in views.values() if "name" in view}

@@ -11,7 +11,7 @@ entity                              archetype             when
 ``world/<arm>/...``                  URDF (Rerun's import)  static: link meshes, frames, joints at 0
 ``world/<arm>/base``                Transform3D           static: ``tf#/world`` -> the URDF's root
 ``world/<arm>/joints/<joint>``      Transform3D           per frame, one ``send_columns`` per joint
-``world/<arm>/pen``                 Cylinders3D           static, in the flange link's frame
+``world/pen/body``                  Cylinders3D           static, in the flange link's frame
 ``world/commanded``                 LineStrips3D          static: the commanded pen-down strokes
 ``world/pen/tip``                   Points3D              per frame
 ``world/pen/path``                  LineStrips3D          one segment per frame (the tip's path)
@@ -43,6 +43,7 @@ accumulated by the default blueprint with a visible time range from the start to
 from __future__ import annotations
 
 import io
+import itertools
 import logging
 import os
 import tempfile
@@ -67,7 +68,14 @@ from prg.plotting import (
     TABLE,
 )
 from prg.recording.stream import recording_stream
-from prg.recording.views import accumulated, flip, framing, log_columns, segments
+from prg.recording.views import (
+    accumulated,
+    flip,
+    framing,
+    framing_eye,
+    log_columns,
+    segments,
+)
 
 if TYPE_CHECKING:  # prg.sim imports this module: nothing of prg.sim at import time
     from prg.sim.robots import RobotSettings
@@ -76,7 +84,13 @@ if TYPE_CHECKING:  # prg.sim imports this module: nothing of prg.sim at import t
 log = logging.getLogger("prg.recording")
 
 SIM_TIMELINE = "sim_time"
+PEN_BODY_ENTITY = "world/pen/body"
 LIFT_M = 0.0002  # draw paths this far over the paper so they are not hidden in it
+# where the 3D views look from, in the page's axes (writing line, up the page, up)
+ROBOT_VIEW_FROM = np.array([0.8, -1.0, 1.2])  # behind the robot's right shoulder
+PEN_VIEW_FROM = np.array([0.25, -0.6, 1.0])  # from the robot's side, steeply down on the word
+VIEW_ASPECT = 1.5  # the 3D views are at least this much wider than tall on a landscape screen
+LEGEND_ROOM = 0.3  # the joint plot's time axis runs on this fraction past the motion
 
 
 def recording_urdf(robot: RobotSettings, folder: str | os.PathLike) -> Path:
@@ -137,40 +151,106 @@ def _pen_geometry(robot: RobotSettings) -> rr.Cylinders3D:
     )
 
 
+def _arm_points(result: SimResult, frames: int = 24) -> np.ndarray:
+    """Corners of the bounding box of every link of the arm at ``frames`` moments of the
+    motion (PyBullet's, at the recorded joint angles), world metres, shape (n, 3)."""
+    from prg.sim.scene import Scene
+
+    steps = np.unique(np.linspace(0, len(result.q) - 1, frames).round().astype(int))
+    corners = []
+    with Scene(result.robot, result.settings.paper) as scene:
+        p, body, cid = scene.p, scene.robot.body, scene.cid
+        links = range(-1, p.getNumJoints(body, physicsClientId=cid))
+        for step in steps:
+            for joint, q in zip(scene.robot.arm, result.q[step]):
+                p.resetJointState(body, joint, float(q), physicsClientId=cid)
+            for link in links:
+                low, high = p.getAABB(body, link, physicsClientId=cid)
+                corners.extend(itertools.product(*zip(low, high)))
+    return np.asarray(corners)
+
+
+def _page_corners(result: SimResult) -> np.ndarray:
+    half_w, half_h = np.asarray(result.settings.paper.size_cm) / 2
+    corners = [[-half_w, -half_h], [half_w, -half_h], [half_w, half_h], [-half_w, half_h]]
+    return result.settings.paper.to_world(corners)
+
+
 def sim_blueprint(result: SimResult) -> rrb.Blueprint:
-    """The default layout: the 3D scene (arm, paper, growing ink), the page with its ink, the
-    final page render, the joint angles and the metrics."""
+    """The default layout, every view framed on its data.
+
+    *Robot*: the arm over its whole motion and the page, seen from behind the robot's right
+    shoulder (the word reads left to right; at this distance it is a few pixels). *Pen on the
+    page*: the written word filling the view, seen from the robot's side, with the pen coming
+    down on it (a wireframe there, so that it hides no ink). Beside them the page in 2D (ink over
+    the commanded strokes) with its TinyRenderer picture in a tab, the joint angles (the time
+    axis runs on past the motion, so that the legend sits beside the curves, not over them) and
+    the metrics. The side panels start collapsed, the time panel as its playback bar.
+    """
     paper = result.settings.paper
-    centre = np.asarray(paper.centre)
-    eye = centre + np.array([-0.45, -0.55, 0.45])
-    scene = rrb.Spatial3DView(
+    axes = paper.rotation  # columns: the page's x (writing line), y (up the page), z (up)
+    strokes = result.plan.strokes()
+    word = paper.to_world(np.concatenate(strokes))
+    trails = {
+        "world/ink": accumulated(SIM_TIMELINE, rr.LineStrips3D),
+        "world/pen/path": accumulated(SIM_TIMELINE, rr.LineStrips3D),
+    }
+    robot = rrb.Spatial3DView(
         origin="world",
         name=f"{result.robot.name} writes {result.text!r}",
         background=SCENE,
-        eye_controls=rrb.EyeControls3D(
-            position=eye.tolist(), look_target=centre.tolist(), eye_up=(0.0, 0.0, 1.0)
+        eye_controls=framing_eye(
+            np.concatenate([_arm_points(result), _page_corners(result)]),
+            axes @ ROBOT_VIEW_FROM,
+            margin=0.05,
+            aspect=VIEW_ASPECT,
         ),
-        overrides={
-            "world/ink": accumulated(SIM_TIMELINE, rr.LineStrips3D),
-            "world/pen/path": accumulated(SIM_TIMELINE, rr.LineStrips3D),
-        },
+        overrides=trails,
+    )
+    see_through_pen = rr.Cylinders3D.from_fields(fill_mode=rr.components.FillMode.MajorWireframe)
+    close_up = rrb.Spatial3DView(
+        origin="world",
+        name="Pen on the page",
+        background=SCENE,
+        eye_controls=framing_eye(word, axes @ PEN_VIEW_FROM, margin=0.3, aspect=VIEW_ASPECT),
+        overrides={**trails, PEN_BODY_ENTITY: see_through_pen.visualizer()},
     )
     page = rrb.Spatial2DView(
         origin="page",
         name="Ink on the page (cm)",
         background=PAPER,
-        visual_bounds=framing(flip(np.concatenate(result.plan.strokes()))),
+        visual_bounds=framing(flip(np.concatenate(strokes))),
         overrides={"page/ink": accumulated(SIM_TIMELINE)},
     )
-    side = [page]
     if result.page is not None:
-        side.append(rrb.Spatial2DView(origin="page_render", name="Page render (TinyRenderer)"))
-    side.append(rrb.TimeSeriesView(origin="joints", name="Joint angles (rad)"))
-    side.append(rrb.TextDocumentView(origin="summary", name="Summary"))
+        render = rrb.Spatial2DView(origin="page_render", name="Page render (TinyRenderer)")
+        page = rrb.Tabs(page, render)
+    end_s = float(result.t[-1])
+    joints = rrb.TimeSeriesView(
+        origin="joints",
+        name="Joint angles (rad)",
+        axis_x=rrb.TimeAxis(
+            link=rrb.components.LinkAxis.Independent,
+            view_range=rrb.TimeRange(
+                start=rrb.TimeRangeBoundary.absolute(seconds=0.0),
+                end=rrb.TimeRangeBoundary.absolute(seconds=end_s * (1.0 + LEGEND_ROOM)),
+            ),
+        ),
+        plot_legend=rrb.PlotLegend(corner=rrb.Corner2D.RightTop, visible=True),
+    )
     return rrb.Blueprint(
-        rrb.Horizontal(rrb.Vertical(scene), rrb.Vertical(*side), column_shares=[3, 2]),
-        rrb.TimePanel(timeline=SIM_TIMELINE),
-        collapse_panels=False,
+        rrb.Horizontal(
+            rrb.Vertical(robot, joints, row_shares=[3, 2]),
+            rrb.Vertical(
+                close_up,
+                page,
+                rrb.TextDocumentView(origin="summary", name="Summary"),
+                row_shares=[3, 2, 2],
+            ),
+            column_shares=[3, 2],
+        ),
+        rrb.TimePanel(timeline=SIM_TIMELINE, state="collapsed"),
+        collapse_panels=True,
     )
 
 
@@ -290,7 +370,10 @@ def record_simulation(
                 columns=rr.Scalars.columns(scalars=result.q[frames, j]),
             )
         rec.log(
-            f"{arm}/pen", rr.CoordinateFrame(robot.flange_link), _pen_geometry(robot), static=True
+            PEN_BODY_ENTITY,
+            rr.CoordinateFrame(robot.flange_link),
+            _pen_geometry(robot),
+            static=True,
         )
 
         # the commanded strokes, the pen tip, its path and the ink

@@ -291,6 +291,14 @@ def log_rollout(
     )
 
 
+def _decoded_strip(letters: np.ndarray) -> np.ndarray:
+    """The decoded letters' points where the strip shows them: y-flipped, letter ``i`` moved
+    ``DECODED_SPACING * i`` to the right; shape (N, k, 2)."""
+    shift = np.zeros((len(letters), 1, 2))
+    shift[:, 0, 0] = DECODED_SPACING * np.arange(len(letters))
+    return flip(letters) + shift
+
+
 def log_decoded(rec: rr.RecordingStream, letters: np.ndarray, names: Sequence[str]) -> None:
     """Raw normalised decoded letters under ``decoded/<name>``, side by side (y-flipped)."""
     for i, (name, pts) in enumerate(zip(names, letters)):
@@ -329,12 +337,14 @@ def write_blueprint(
     image_names: Sequence[str] = (),
     audio: bool = False,
     transcript: bool = False,
-    decoded: bool = False,
+    decoded: np.ndarray | None = None,
 ) -> rrb.Blueprint:
     """The default layout: the word (with the growing rollout path) beside the inputs.
 
     The word view has a white background (paper) and shows ``word/rollout/path`` accumulated
-    from the start of ``time`` to the cursor; the time panel opens on ``time``.
+    from the start of ``time`` to the cursor; it and the strip of ``decoded`` letters (shape
+    (N, k, 2), when given) open on bounds around their points with a margin, so every letter
+    is whole. The side panels start collapsed, the time panel as its playback bar on ``time``.
     """
     word_view = rrb.Spatial2DView(
         origin="word",
@@ -344,14 +354,27 @@ def write_blueprint(
         overrides={"word/rollout/path": accumulated(TIMELINE)},
     )
     left = [word_view]
-    if decoded:
-        left.append(rrb.Spatial2DView(origin="decoded", name="Decoded letters", background=PAPER))
+    if decoded is not None:
+        left.append(
+            rrb.Spatial2DView(
+                origin="decoded",
+                name="Decoded letters",
+                background=PAPER,
+                visual_bounds=framing(_decoded_strip(decoded), margin=0.1),
+            )
+        )
     right: list = []
     if transcript:
         right.append(rrb.TextDocumentView(origin="inputs/transcript", name="Transcript"))
     if audio:
         right.append(rrb.AudioView(origin="inputs/audio", name="Audio"))
-        right.append(rrb.TimeSeriesView(origin="inputs/waveform", name="Waveform"))
+        right.append(
+            rrb.TimeSeriesView(
+                origin="inputs/waveform",
+                name="Waveform",
+                plot_legend=rrb.PlotLegend(visible=False),  # min and max: one colour, no key
+            )
+        )
     if image_names:
         right.append(
             rrb.Grid(
@@ -366,8 +389,8 @@ def write_blueprint(
             rrb.Vertical(*right),
             column_shares=[3, 1],
         ),
-        rrb.TimePanel(timeline=TIMELINE),
-        collapse_panels=False,
+        rrb.TimePanel(timeline=TIMELINE, state="collapsed"),
+        collapse_panels=True,
     )
 
 
@@ -439,7 +462,7 @@ def record_write(
         image_names=names if imgs is not None else (),
         audio=audio is not None,
         transcript=transcript is not None,
-        decoded=raw is not None,
+        decoded=raw,
     )
     with recording_stream(path, application_id, blueprint=blueprint) as rec:
         rec.log(

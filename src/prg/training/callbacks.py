@@ -1,19 +1,23 @@
-"""Lightning callbacks: the checkpoint to resume from, MLflow run bookkeeping, generation figures."""
+"""Lightning callbacks: the checkpoint to resume from, MLflow run bookkeeping, training curves
+every few steps, a validation metric shared by every family, generation figures."""
 
 from __future__ import annotations
 
 import contextlib
 import logging
+import math
 import os
 import tempfile
 from pathlib import Path
 from typing import Any
 
 import lightning as L
+import torch
 from lightning.pytorch.callbacks import Checkpoint, EarlyStopping, ModelCheckpoint
 from lightning.pytorch.loggers import MLFlowLogger
 
 from prg.files import atomic_path
+from prg.models.modalities import MODALITIES, TRAJ
 from prg.plotting import pyplot
 
 log = logging.getLogger(__name__)
@@ -165,14 +169,146 @@ class MLflowRun(L.Callback):
             log.info("registered %s version %s", self.register_as, version.version)
 
 
+class StepMeans(L.Callback):
+    """Training curves with enough points: every ``trainer.log_every_n_steps`` optimizer steps,
+    the mean of each loss term over those steps, logged to MLflow as ``train_steps/<term>`` at
+    the step of the window's last batch (0-based, as Lightning logs the epoch means
+    ``train/<term>``, which stay as they are).
+
+    Nothing is added to the training step: the window's sums are the growth of the per-epoch
+    sums :class:`~prg.models.module.PRGModule` accumulates anyway, and a window across an epoch's
+    end carries that epoch's tail over. Each window costs one small tensor reduction (the mean
+    over DDP ranks) and one MLflow write. The open window travels in checkpoints, so a resumed
+    run continues it."""
+
+    def __init__(self) -> None:
+        self._window: dict[str, torch.Tensor] = {}  # sums of the open window (earlier epochs)
+        self._window_count = 0
+        self._seen: dict[str, torch.Tensor] = {}  # the module's sums when last read, this epoch
+        self._seen_count = 0
+        self._logged_step = -1
+
+    def _read(self, pl_module: L.LightningModule) -> None:
+        """Add the module's sums since the last read to the open window."""
+        sums = getattr(pl_module, "_sums", {}).get("train", {})
+        count = getattr(pl_module, "_counts", {}).get("train", 0)
+        for key, value in sums.items():
+            grown = value - self._seen.get(key, 0.0)
+            self._window[key] = self._window.get(key, 0.0) + grown
+        self._window_count += count - self._seen_count
+        self._seen, self._seen_count = {k: v.detach().clone() for k, v in sums.items()}, count
+
+    def on_train_batch_end(self, trainer, pl_module, outputs, batch, batch_idx) -> None:
+        every, step = trainer.log_every_n_steps, trainer.global_step
+        # (with gradient accumulation several batches end at one optimizer step: the first logs)
+        if not every or not step or step % every or step == self._logged_step:
+            return
+        self._read(pl_module)
+        self._logged_step = step
+        if not self._window_count:  # nothing trained since the last window (every rank alike)
+            return
+        keys = sorted(self._window)
+        means = torch.stack([self._window[k].float() for k in keys]) / self._window_count
+        means = trainer.strategy.reduce(means, reduce_op="mean")  # every rank, the same step
+        self._window, self._window_count = {}, 0
+        logger = _mlflow(trainer)
+        if logger is not None and trainer.is_global_zero:
+            metrics = {f"train_steps/{k}": v for k, v in zip(keys, means.tolist())}
+            logger.log_metrics(metrics, step=step - 1)
+
+    def on_train_epoch_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
+        # before the module's hook (Lightning calls callbacks that monitor nothing first), which
+        # logs the epoch's means and clears its sums
+        self._read(pl_module)
+        self._seen, self._seen_count = {}, 0
+
+    def on_train_start(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
+        device = pl_module.device  # a resumed window was loaded on the CPU
+        self._window = {k: v.to(device) for k, v in self._window.items()}
+        self._seen = {k: v.to(device) for k, v in self._seen.items()}
+
+    def state_dict(self) -> dict[str, Any]:
+        return {
+            "window": self._window,
+            "window_count": self._window_count,
+            "seen": self._seen,
+            "seen_count": self._seen_count,
+        }
+
+    def load_state_dict(self, state_dict: dict[str, Any]) -> None:
+        self._window, self._window_count = dict(state_dict["window"]), state_dict["window_count"]
+        self._seen, self._seen_count = dict(state_dict["seen"]), state_dict["seen_count"]
+
+
+class TrajectoryNLL(L.Callback):
+    """``val/nll_per_dim_traj`` (in MLflow ``val/nll_per_dim_T``): one validation number every
+    family logs on the same footing, to compare families in one column.
+
+    The negative log-likelihood of each validation trajectory under the model's own Gaussian
+    (``traj_std``, 0.1 in every family's config), decoded from the posterior mean given the
+    trajectory (the CVAE: and its label, which its encoder needs), per coordinate: the sum over
+    the 200 coordinates divided by 200, averaged over the validation samples. It is a
+    reconstruction likelihood, not the marginal log p(x_T) (the CVAE has none; ``prg-evaluate``
+    estimates Table I's cells): lower is better, and a constant plus 50 x the mean squared
+    error at std 0.1. Costs one encode and decode of each validation batch."""
+
+    KEY = f"val/nll_per_dim_{TRAJ}"
+
+    def on_validation_epoch_start(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
+        self._sum: torch.Tensor | float = 0.0
+        self._count = 0
+
+    def on_validation_batch_end(
+        self, trainer, pl_module, outputs, batch, batch_idx, dataloader_idx=0
+    ) -> None:
+        model = pl_module.model
+        given = min((s for s in model.accepted_inputs if TRAJ in s), key=len, default=None)
+        if given is None or TRAJ not in model.generated_modalities:
+            return
+        mean = model.generate({m: batch[m] for m in given}, TRAJ)[0].float()
+        self._sum = self._sum - model.likelihoods.log_prob(TRAJ, mean, batch[TRAJ]).sum()
+        self._count += len(mean)
+
+    def on_validation_epoch_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
+        if self._count:  # sync_dist: the mean over DDP ranks (equal shards)
+            dims = math.prod(MODALITIES[TRAJ].shape)
+            pl_module.log(self.KEY, self._sum / (self._count * dims), sync_dist=True)
+
+
 class GenerationFigures(L.Callback):
     """Every ``every_n_epochs`` validation epochs and at the end of training: reconstructions of
     each modality and the cross-modal generations the family supports (label -> trajectory for
-    all 62 classes, image -> trajectory, trajectory -> image), logged to MLflow as PNGs."""
+    all 62 classes, image -> trajectory, trajectory -> image), logged to MLflow as PNGs of
+    ``dpi`` dots per inch.
 
-    def __init__(self, every_n_epochs: int = 5, n_examples: int = 8):
+    The examples are ``n_examples`` validation samples of classes spread over the alphabet
+    (:func:`~prg.training.generation_figures.spread_examples`: digits, upper- and lowercase
+    letters), picked with ``seed``: the same ones at every epoch and, whatever the run's seed,
+    in every run on the same data, so figures compare across runs. Their classes are in
+    :attr:`example_classes` once drawn."""
+
+    def __init__(self, every_n_epochs: int = 5, n_examples: int = 8, dpi: int = 150, seed: int = 0):
         self.every_n_epochs = every_n_epochs
         self.n_examples = n_examples
+        self.dpi = dpi
+        self.seed = seed
+        self.example_indices: list[int] | None = None
+        self.example_classes: list[str] = []
+
+    def _examples(self, datamodule: L.LightningDataModule) -> dict[str, torch.Tensor]:
+        """The chosen validation samples as one batch (chosen on the first call)."""
+        dataset = datamodule.val_dataloader().dataset
+        if self.example_indices is None:
+            from prg.alphabet import ALPHABET
+            from prg.data.store import load_split
+            from prg.models.modalities import LABEL
+            from prg.training.generation_figures import spread_examples
+
+            # every split holds the labels, also for families that do not model them
+            labels = load_split(Path(datamodule.root) / "val.npz")[LABEL]
+            self.example_indices = spread_examples(labels, self.n_examples, self.seed).tolist()
+            self.example_classes = [ALPHABET[int(labels[i])] for i in self.example_indices]
+        return dataset.__getitems__(self.example_indices)
 
     def on_validation_epoch_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
         epoch = trainer.current_epoch + 1
@@ -189,13 +325,12 @@ class GenerationFigures(L.Callback):
             return
         from prg.training.generation_figures import generation_figures
 
-        loader = trainer.datamodule.val_dataloader()
-        batch = next(iter(loader))
-        batch = {k: v[: self.n_examples].to(pl_module.device) for k, v in batch.items()}
+        batch = self._examples(trainer.datamodule)
+        batch = {k: v.to(pl_module.device) for k, v in batch.items()}
         was_training = pl_module.training
         pl_module.eval()
         try:
-            figures = generation_figures(pl_module.model, batch)
+            figures = generation_figures(pl_module.model, batch, self.example_classes)
         finally:
             pl_module.train(was_training)
         plt = pyplot()
@@ -203,7 +338,7 @@ class GenerationFigures(L.Callback):
         with tempfile.TemporaryDirectory() as tmp:
             for name, fig in figures.items():
                 path = os.path.join(tmp, f"{name}.png")
-                fig.savefig(path, dpi=72)
+                fig.savefig(path, dpi=self.dpi)
                 plt.close(fig)
                 logger.experiment.log_artifact(logger.run_id, path, f"figures/{tag}")
 

@@ -46,6 +46,21 @@ def image_grid(images: np.ndarray, titles: list[str], cols: int = 16, title: str
     return _grid(images, titles, cols, title, (0.6, 0.7), _draw_image)
 
 
+def spread_examples(labels: np.ndarray, n: int, seed: int) -> np.ndarray:
+    """Indices of ``n`` samples whose classes spread evenly over the classes in ``labels``, in
+    class order (digits, uppercase, lowercase: with all 62, ``n=8`` gives 0 9 H Q Z i q z), one
+    sample of each drawn with ``seed`` (more samples than classes: classes repeat)."""
+    present = np.unique(labels)
+    classes = present[np.round(np.linspace(0, len(present) - 1, n)).astype(int)]
+    rng = np.random.default_rng(seed)
+    picked: list[int] = []
+    for c in classes:
+        of_class = np.flatnonzero(labels == c)
+        unused = np.setdiff1d(of_class, picked)
+        picked.append(int(rng.choice(unused if len(unused) else of_class)))
+    return np.array(picked)
+
+
 GRIDS = {"points": trajectory_grid, "pixels": image_grid}
 """The grid figure of each kind of modality (:data:`prg.models.modalities.KINDS`; class labels are shown
 as the titles of others)."""
@@ -57,12 +72,18 @@ def grid_of(modality: str):
 
 
 @torch.no_grad()
-def generation_figures(model: MultimodalVAE, batch: dict[str, torch.Tensor]) -> dict:
+def generation_figures(
+    model: MultimodalVAE, batch: dict[str, torch.Tensor], names: list[str] | None = None
+) -> dict:
     """Figures for a family: ``recon_<modality>``, ``label_to_traj`` (62 classes),
-    ``image_to_traj``, ``traj_to_image`` — each only where the family supports it."""
+    ``image_to_traj``, ``traj_to_image`` — each only where the family supports it. ``names``
+    titles the samples of ``batch`` (default: their classes where the batch has labels)."""
     figures = {}
     n = len(next(iter(batch.values())))
-    names = [ALPHABET[int(y)] for y in batch[LABEL]] if LABEL in batch else list(map(str, range(n)))
+    if not names:
+        names = (
+            [ALPHABET[int(y)] for y in batch[LABEL]] if LABEL in batch else [*map(str, range(n))]
+        )
     for m in model.generated_modalities:
         given = {m: batch[m]} if model.accepts({m: batch[m]}) else dict(batch)
         out = model.generate(given, m)[0].cpu().numpy()
