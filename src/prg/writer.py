@@ -370,4 +370,3 @@ def trajectory_inputs(trajectories: PathOrStrokes) -> torch.Tensor:
     if isinstance(trajectories, str | os.PathLike):
         trajectories, y_down = read_trajectories(trajectories)
     return torch.from_numpy(perceive_trajectories(trajectories, y_down=y_down))
-
