@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import argparse
 import importlib.metadata
-import json
 import os
 import platform
 import statistics
@@ -40,6 +39,8 @@ import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
+
+from prg.files import write_json
 
 RESULTS = Path(__file__).parent / "results"
 ROOT = Path(__file__).resolve().parent.parent
@@ -231,10 +232,7 @@ def main() -> None:
         "left_in_working_folder": left_in_cwd,
     }
     RESULTS.mkdir(exist_ok=True)
-    out = RESULTS / "bench_startup.json"
-    tmp_out = out.with_suffix(".json.tmp")
-    tmp_out.write_text(json.dumps(report, indent=2) + "\n")
-    tmp_out.replace(out)
+    out = write_json(RESULTS / "bench_startup.json", report)
     print(f"\nwrote {out}")
 
 

@@ -18,6 +18,9 @@ from prg.recording import read_entities, read_times
 from prg.tracking import sqlite_uri
 from tests.conftest import run_cli
 
+# what prg-write leaves in its folder (with the default record=true)
+WORD_OUTPUTS = {"word.json", "word.png", "word.svg", "dmp_rollout.csv", "motion.csv", "word.rrd"}
+
 
 @pytest.fixture(scope="module")
 def checkpoint(untrained_muse_checkpoint) -> Path:
@@ -34,14 +37,7 @@ def test_writes_the_word_its_renderings_rollout_and_an_mlflow_run(tmp_path, chec
         f"paths.root_dir={tmp_path}",
     )
     assert result.returncode == 0, result.stderr[-2000:]
-    assert {p.name for p in out.iterdir()} == {
-        "word.json",
-        "word.png",
-        "word.svg",
-        "dmp_rollout.csv",
-        "motion.csv",
-        "word.rrd",
-    }
+    assert {p.name for p in out.iterdir()} == WORD_OUTPUTS
     word = WordTrajectory.from_json(out / "word.json")
     entities = read_entities(out / "word.rrd")
     assert {f"word/letters/{i}_{c}" for i, c in enumerate("abcd")} <= set(entities)
@@ -241,14 +237,7 @@ def test_each_word_gets_its_own_folder_named_by_text_and_time(tmp_path, checkpoi
     assert sorted(family.iterdir()) == sorted(folders)
     for folder in folders:
         assert re.fullmatch(WORD_FOLDER, folder.name), folder.name
-        assert {p.name for p in folder.iterdir()} == {
-            "word.json",
-            "word.png",
-            "word.svg",
-            "dmp_rollout.csv",
-            "motion.csv",
-            "word.rrd",
-        }
+        assert {p.name for p in folder.iterdir()} == WORD_OUTPUTS
         assert WordTrajectory.from_json(folder / "word.json").text == "ab cd"
 
 
