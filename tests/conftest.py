@@ -100,3 +100,20 @@ def writer_variation(pts: np.ndarray, u: np.ndarray, rng: np.random.Generator, a
         )
         pts[:, d] += wobble.sum(axis=1)
     return normalise(resample_arclength(pts, 100))
+
+
+def wait_for_pending_runs(root: Path, timeout: float = 120) -> None:
+    """Wait until the MLflow runs that commands under project ``root`` handed to background
+    loggers (``prg.tracking.task_run(background=True)``) are in the store: their files under
+    ``logs/pending-runs/`` are gone. Fails with the loggers' log if one is still there."""
+    import time
+
+    folder = root / "logs" / "pending-runs"
+    deadline = time.monotonic() + timeout
+    while any(folder.glob("*.json")):
+        if time.monotonic() > deadline:
+            log = folder / "log.txt"
+            pytest.fail(
+                f"pending runs not logged: {log.read_text()[-2000:] if log.exists() else ''}"
+            )
+        time.sleep(0.1)

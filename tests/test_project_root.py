@@ -12,7 +12,7 @@ import pytest
 
 from prg.commands import cli
 from prg.commands.cli import compose_config, is_project_root, project_root
-from tests.conftest import REPO, run_cli
+from tests.conftest import REPO, run_cli, wait_for_pending_runs
 
 PYPROJECT = '[build-system]\nrequires = ["setuptools"]\n\n[project]\nname = "prg"\nversion = "0"\n'
 
@@ -118,5 +118,6 @@ def test_a_command_run_below_a_project_writes_every_output_under_it(
     assert files_under(cwd) == set()
     words = list(project.glob("outputs/write/muse/*/word.json"))
     assert len(words) == 1
+    wait_for_pending_runs(project)  # the run is logged by a background process
     assert (project / "mlruns.db").is_file() and (project / "mlartifacts").is_dir()
     assert any(project.glob("logs/write/runs/*/.hydra/config.yaml"))

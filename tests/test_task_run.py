@@ -1,13 +1,16 @@
 """One MLflow run per command's work (``prg.tracking.task_run``), on a real SQLite store: its
-params, metrics and artifacts, and its status when the work completes, fails or is stopped."""
+params, metrics and artifacts, and its status when the work completes, fails or is stopped;
+logged in the command's process or handed to a background logger (``background=True``)."""
 
 from __future__ import annotations
 
 import pytest
 from omegaconf import OmegaConf
 
+from prg.errors import UsageError
 from prg.signals import Interrupted
-from prg.tracking import mlflow_client, sqlite_uri, task_run
+from prg.tracking import PendingRun, TaskRun, log_pending_run, mlflow_client, sqlite_uri, task_run
+from tests.conftest import wait_for_pending_runs
 
 
 @pytest.fixture()
@@ -15,7 +18,7 @@ def cfg(tmp_path):
     return OmegaConf.create(
         {
             "run_name": "task-run-test",
-            "paths": {"root_dir": str(tmp_path)},
+            "paths": {"root_dir": str(tmp_path), "log_dir": str(tmp_path / "logs")},
             "logger": {
                 "experiment_name": "prg-tests",
                 "task_experiment_name": "prg-tests-tasks",
@@ -32,15 +35,25 @@ def _runs(cfg):
     return client.search_runs([experiment.experiment_id])
 
 
-def test_a_completed_task_is_finished_with_its_params_metrics_and_artifacts(cfg, tmp_path):
+@pytest.mark.parametrize("background", [False, True])
+def test_a_completed_task_is_finished_with_its_params_metrics_and_artifacts(
+    cfg, tmp_path, background
+):
     folder = tmp_path / "out"
     folder.mkdir()
     (folder / "word.json").write_text("{}")
-    with task_run(cfg, "write", {"prg.family": "muse"}) as run:
+    with task_run(cfg, "write", {"prg.family": "muse"}, background=background) as run:
+        assert isinstance(run, PendingRun if background else TaskRun)
+        assert (tmp_path / "mlruns.db").exists() != background  # handed off: no store opened
         run.log_params({"text": "cat", "generate": {"speed_cm_s": 2.0, "seed": 0}})
         run.log_metrics({"latency_ms": 12.5, "points": 7, "not_a_number": "x"}, prefix="write/")
+        run.set_tag("prg.text", "cat")
+        run.log_text("a note", "note.txt")
         run.log_artifacts(folder, "word")
+    wait_for_pending_runs(tmp_path)
     (found,) = _runs(cfg)
+    assert found.data.tags["prg.text"] == "cat"
+    assert found.info.end_time >= found.info.start_time
     assert found.info.status == "FINISHED" and found.info.run_name == "task-run-test"
     assert found.data.tags["prg.task"] == "write" and found.data.tags["prg.family"] == "muse"
     assert found.data.tags["mlflow.note.content"].startswith("**prg-write**: a word written")
@@ -49,6 +62,7 @@ def test_a_completed_task_is_finished_with_its_params_metrics_and_artifacts(cfg,
     assert found.data.metrics == {"write/latency_ms": 12.5, "write/points": 7.0}
     client = mlflow_client(cfg.logger.tracking_uri)
     assert [a.path for a in client.list_artifacts(found.info.run_id, "word")] == ["word/word.json"]
+    assert client.download_artifacts(found.info.run_id, "note.txt", str(tmp_path))
 
 
 def client_experiments(cfg) -> list[str]:
@@ -60,9 +74,13 @@ def client_experiments(cfg) -> list[str]:
     ("error", "status"),
     [(ValueError("the work failed"), "FAILED"), (Interrupted(15), "KILLED")],
 )
-def test_a_failed_or_stopped_task_is_marked_so_and_the_error_goes_on(cfg, error, status):
-    with pytest.raises(type(error)), task_run(cfg, "evaluate"):
+@pytest.mark.parametrize("background", [False, True])
+def test_a_failed_or_stopped_task_is_marked_so_and_the_error_goes_on(
+    cfg, tmp_path, error, status, background
+):
+    with pytest.raises(type(error)), task_run(cfg, "evaluate", background=background):
         raise error
+    wait_for_pending_runs(tmp_path)
     (found,) = _runs(cfg)
     assert found.info.status == status
 
@@ -95,6 +113,7 @@ def test_a_command_whose_work_fails_leaves_a_failed_run(tmp_path, untrained_muse
         f"ckpt={untrained_muse_checkpoint}",
         f"paths.root_dir={tmp_path}",
         f"out_dir={tmp_path / 'out'}",
+        "mlflow_background=false",  # logged before the command returns
     )
     assert result.returncode == 2, result.stderr[-2000:]
     assert "trajectories= gives 2 letters" in result.stderr
@@ -105,3 +124,53 @@ def test_a_command_whose_work_fails_leaves_a_failed_run(tmp_path, untrained_muse
     note = found.data.tags["mlflow.note.content"]  # the command line as typed
     assert "Command: `prg-write text=cat trajectories=" in note and "Model: `muse`" in note
     assert not (tmp_path / "out").exists()
+
+
+def test_a_pending_run_that_cannot_be_logged_is_kept_whole_for_a_retry(cfg, tmp_path):
+    import time
+
+    folder = tmp_path / "out"
+    folder.mkdir()
+    (folder / "word.json").write_text("{}")
+    (folder / "word.png").symlink_to(tmp_path / "deleted.png")  # unreadable when logged
+    with task_run(cfg, "write", background=True) as run:
+        run.log_metrics({"points": 3})
+        run.log_artifacts(folder, "word")
+    pending = tmp_path / "logs" / "pending-runs"
+    log = pending / "log.txt"
+    deadline = time.monotonic() + 120
+    while "not logged" not in (log.read_text() if log.exists() else ""):
+        assert time.monotonic() < deadline, "the background logger never gave up"
+        time.sleep(0.1)
+    (line,) = [x for x in log.read_text().splitlines() if x.startswith("prg.tracking: error")]
+    (path,) = pending.glob("*.json")
+    assert f"pending run {path} not logged" in line and "log-pending" in line
+    assert _runs(cfg) == []  # the half-logged run is deleted
+    folder.rename(tmp_path / "moved")
+    with pytest.raises(FileNotFoundError, match=r"output folder .* is gone"):
+        log_pending_run(path)  # refused before a run is made
+    assert path.is_file() and _runs(cfg) == []
+    (tmp_path / "moved").rename(folder)
+    (folder / "word.png").unlink()
+    run_id = log_pending_run(path)
+    assert not path.exists()
+    (found,) = _runs(cfg)
+    assert found.info.run_id == run_id and found.data.metrics == {"points": 3.0}
+
+
+def test_a_file_that_is_not_a_pending_run_gets_one_line(tmp_path):
+    import subprocess
+    import sys
+
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"tracking_uri": "sqlite:///x.db"}')
+    with pytest.raises(UsageError, match="not a pending run file"):
+        log_pending_run(bad)
+    result = subprocess.run(
+        [sys.executable, "-m", "prg.tracking", "log-pending", str(bad)],
+        capture_output=True,
+        text=True,
+    )
+    assert result.returncode == 2 and len(result.stderr.strip().splitlines()) == 1, result.stderr
+    assert f"pending run {bad}: not a pending run file" in result.stderr
+    assert bad.is_file()

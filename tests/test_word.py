@@ -14,7 +14,13 @@ from prg.errors import UsageError
 from prg.pipeline.connect import ConnectionSettings, connect_sequence
 from prg.pipeline.dmp import DMP, fit_dmp
 from prg.pipeline.layout import layout_letters, word_breaks
-from prg.pipeline.word import SCHEMA_VERSION, WordTrajectory, _atomic_write, assemble_word
+from prg.pipeline.word import (
+    SCHEMA_VERSION,
+    WordTrajectory,
+    _atomic_write,
+    assemble_word,
+    dash_pieces,
+)
 from tests.conftest import letter_like
 
 TEXT = "ab cd"
@@ -224,3 +230,45 @@ def test_png_opens_and_shows_connections_only_when_highlighted(word, tmp_path):
         assert img.format == "PNG" and img.width > img.height > 10
     assert reddish_pixels(highlighted) > 0
     assert reddish_pixels(plain) == 0
+
+
+def test_the_png_is_true_to_scale_with_the_ink_where_the_points_are(word, tmp_path):
+    dpi = 100
+    with Image.open(word.to_png(tmp_path / "w.png", dpi=dpi, highlight=False)) as img:
+        dark = np.asarray(img.convert("L")) < 128
+        assert img.info["dpi"] == pytest.approx((dpi, dpi), rel=1e-4)  # stored per metre
+    extent_cm = np.ptp(word.points, axis=0) + 0.6  # the 0.3 cm margin on each side
+    assert dark.shape[::-1] == tuple(np.ceil(extent_cm / 2.54 * dpi).astype(int))
+    rows, cols = np.nonzero(dark)
+    px_per_cm = dpi / 2.54
+    for got, extent in zip((np.ptp(cols), np.ptp(rows)), np.ptp(word.points, axis=0)):
+        assert got / px_per_cm == pytest.approx(extent, abs=0.1)  # within a pen width or two
+    # every drawn point is inked (a 3x3 neighbourhood: the pen is about 1.6 px wide at 100 dpi)
+    lo = word.points.min(axis=0) - 0.3
+    x = np.rint((word.points[:, 0] - lo[0]) * px_per_cm).astype(int)
+    y = np.rint((word.points.max(axis=0)[1] + 0.3 - word.points[:, 1]) * px_per_cm).astype(int)
+    padded = np.pad(dark, 1)
+    near = np.zeros(len(x), bool)
+    for dx in (0, 1, 2):
+        for dy in (0, 1, 2):
+            near |= padded[y + dy, x + dx]
+    pen_down = ~np.isin(np.asarray(word.segment_kinds)[word.segment], ["space", "lift"])
+    assert near[pen_down].all() and pen_down.sum() > 100
+
+
+@pytest.mark.parametrize("pattern", [(3.0, 3.0), (1.0, 3.0), (2.0, 1.0, 0.5, 1.0)])
+def test_dashes_cover_their_share_of_the_line_and_stay_on_it(pattern):
+    rng = np.random.default_rng(1)
+    points = np.cumsum(rng.normal(0, 1, (40, 2)), axis=0)
+    steps = np.hypot(*np.diff(points, axis=0).T)
+    pieces = dash_pieces(points, pattern)
+    lengths = [np.hypot(*np.diff(p, axis=0).T).sum() for p in pieces]
+    period, on = sum(pattern), sum(pattern[0::2])
+    assert max(lengths) <= max(pattern[0::2]) + 1e-9
+    assert sum(lengths) == pytest.approx(steps.sum() * on / period, abs=period)
+    # each dash's ends lie on the polyline (distance to its nearest segment)
+    for piece in pieces:
+        for end in (piece[0], piece[-1]):
+            a, b = points[:-1], points[1:]
+            t = np.clip(((end - a) * (b - a)).sum(1) / np.maximum((steps**2), 1e-12), 0, 1)
+            assert np.min(np.hypot(*(a + t[:, None] * (b - a) - end).T)) < 1e-9

@@ -16,7 +16,7 @@ from prg.errors import UsageError
 from prg.pipeline.word import WordTrajectory
 from prg.recording import read_entities, read_times
 from prg.tracking import sqlite_uri
-from tests.conftest import run_cli
+from tests.conftest import run_cli, wait_for_pending_runs
 
 # what prg-write leaves in its folder (with the default record=true)
 WORD_OUTPUTS = {"word.json", "word.png", "word.svg", "dmp_rollout.csv", "motion.csv", "word.rrd"}
@@ -56,6 +56,7 @@ def test_writes_the_word_its_renderings_rollout_and_an_mlflow_run(tmp_path, chec
     assert np.all(np.diff(motion[:, 0]) > 0) and set(motion[:, 3]) <= {0.0, 1.0}
     assert motion[-1, 0] == pytest.approx(word.duration_s, rel=1e-6)
     np.testing.assert_allclose(motion[0, 1:3], word.points[0], atol=1e-5)
+    wait_for_pending_runs(tmp_path)  # logged by a background process (mlflow_background=true)
     client = MlflowClient(sqlite_uri(tmp_path / "mlruns.db"))
     (run,) = client.search_runs(
         [client.get_experiment_by_name("prg-tasks").experiment_id], "tags.`prg.task` = 'write'"
@@ -145,6 +146,7 @@ def test_audio_channel_speech_to_word_with_recording(tmp_path, checkpoint):
     assert WordTrajectory.from_json(out / "word.json").text == "jump"
     entities = read_entities(out / "word.rrd")
     assert {"inputs/audio", "inputs/waveform", "inputs/transcript"} <= set(entities)
+    wait_for_pending_runs(tmp_path)  # logged by a background process (mlflow_background=true)
     client = MlflowClient(sqlite_uri(tmp_path / "mlruns.db"))
     (run,) = client.search_runs([client.get_experiment_by_name("prg-tasks").experiment_id])
     assert run.data.params["speech.word"] == "jump" and run.data.params["audio"] == str(wav)

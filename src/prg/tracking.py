@@ -201,28 +201,44 @@ def task_description(task: str, tags: Mapping[str, str]) -> str:
     return "  \n".join(lines)
 
 
-class TaskRun:
-    """An open MLflow run of a command (:func:`task_run`): log params, metrics, text, artifacts."""
+def _param_texts(params: Mapping[str, Any]) -> dict[str, str]:
+    """``params`` flattened to ``a.b.c``, each value as text of at most :data:`PARAM_CHARS`."""
+    return {key: str(value)[:PARAM_CHARS] for key, value in flatten(dict(params)).items()}
 
-    PARAM_CHARS = 500  # MLflow's limit on a param value in older stores
+
+def _finite_metrics(metrics: Mapping[str, Any], prefix: str) -> dict[str, float]:
+    """The finite numbers of ``metrics`` under ``prefix + key``; other values are left out."""
+    return {
+        f"{prefix}{key}": float(value)
+        for key, value in metrics.items()
+        if not isinstance(value, bool) and isinstance(value, int | float) and math.isfinite(value)
+    }
+
+
+PARAM_CHARS = 500  # MLflow's limit on a param value in older stores
+
+
+class TaskRun:
+    """An open MLflow run of a command (:func:`task_run`): log tags, params, metrics, text,
+    artifacts."""
 
     def __init__(self, client: Any, run_id: str):
         self.client = client
         self.run_id = run_id
 
+    def set_tag(self, key: str, value: Any) -> None:
+        self.client.set_tag(self.run_id, key, str(value))
+
     def log_params(self, params: Mapping[str, Any]) -> None:
         """``params`` (nested mappings flattened to ``a.b.c``), each value as text."""
-        for key, value in flatten(dict(params)).items():
-            self.client.log_param(self.run_id, key, str(value)[: self.PARAM_CHARS])
+        for key, value in _param_texts(params).items():
+            self.client.log_param(self.run_id, key, value)
 
     def log_metrics(self, metrics: Mapping[str, Any], prefix: str = "") -> None:
         """The finite numbers of ``metrics``, each under ``prefix + key``; others are skipped."""
         now = int(time.time() * 1000)
-        for key, value in metrics.items():
-            if isinstance(value, bool) or not isinstance(value, int | float):
-                continue
-            if math.isfinite(value):
-                self.client.log_metric(self.run_id, f"{prefix}{key}", float(value), timestamp=now)
+        for key, value in _finite_metrics(metrics, prefix).items():
+            self.client.log_metric(self.run_id, key, value, timestamp=now)
 
     def log_text(self, text: str, name: str) -> None:
         self.client.log_text(self.run_id, text, name)
@@ -231,10 +247,45 @@ class TaskRun:
         self.client.log_artifacts(self.run_id, str(folder), path)
 
 
+class PendingRun:
+    """What a :class:`TaskRun` would log (the same methods), kept as plain data for
+    :func:`log_pending_run` to log later in another process (:func:`task_run` with
+    ``background=True``)."""
+
+    def __init__(self) -> None:
+        self.tags: dict[str, str] = {}
+        self.params: dict[str, str] = {}
+        self.metrics: dict[str, float] = {}
+        self.texts: dict[str, str] = {}
+        self.artifacts: list[tuple[str, str]] = []  # (absolute folder, artifact path)
+
+    def set_tag(self, key: str, value: Any) -> None:
+        self.tags[key] = str(value)
+
+    def log_params(self, params: Mapping[str, Any]) -> None:
+        self.params.update(_param_texts(params))
+
+    def log_metrics(self, metrics: Mapping[str, Any], prefix: str = "") -> None:
+        self.metrics.update(_finite_metrics(metrics, prefix))
+
+    def log_text(self, text: str, name: str) -> None:
+        self.texts[name] = text
+
+    def log_artifacts(self, folder: str | os.PathLike, path: str) -> None:
+        self.artifacts.append((str(Path(folder).resolve()), path))
+
+
+PENDING_FOLDER = "pending-runs"  # under paths.log_dir: runs handed to a background process
+
+
 @contextmanager
 def task_run(
-    cfg: Any, task: str, tags: Mapping[str, str] | None = None, enabled: bool = True
-) -> Iterator[TaskRun | None]:
+    cfg: Any,
+    task: str,
+    tags: Mapping[str, str] | None = None,
+    enabled: bool = True,
+    background: bool = False,
+) -> Iterator[TaskRun | PendingRun | None]:
     """The MLflow run of one command's work, on the configured store (``cfg.logger``,
     ``cfg.paths.root_dir``), named ``cfg.run_name`` and tagged ``prg.task=<task>`` (and the sweep's
     parent run inside a Hydra multirun), in the task experiment (``logger.task_experiment_name``)
@@ -243,17 +294,51 @@ def task_run(
     Opened before the work and ended after it: ``FINISHED`` when the block completes, ``FAILED``
     when it raises, ``KILLED`` when a signal stops it (the error is re-raised either way). With
     ``enabled=False`` nothing is opened and the block gets ``None``.
+
+    With ``background=True`` the block gets a :class:`PendingRun` and MLflow is not imported
+    here (importing it and opening a store cost a short command most of its time): when the
+    block ends, the run, with its real start and end times and status, is written to
+    ``<paths.log_dir>/pending-runs/`` and logged by a detached process
+    (``python -m prg.tracking log-pending FILE``), which deletes the file once the run is in the
+    store; after a failure the file stays, with the error in ``pending-runs/log.txt``.
     """
     if not enabled:
         yield None
         return
     from prg.signals import Interrupted
 
-    client, experiment = task_client(cfg)
     all_tags = {"prg.task": task, **(tags or {})}
     all_tags[DESCRIPTION_TAG] = task_description(task, all_tags)
     if os.environ.get(PARENT_ENV):
         all_tags["mlflow.parentRunId"] = os.environ[PARENT_ENV]
+    if background:
+        pending, start_ms, status = PendingRun(), int(time.time() * 1000), "FINISHED"
+        try:
+            yield pending
+        except (Interrupted, KeyboardInterrupt):
+            status = "KILLED"
+            raise
+        except BaseException:
+            status = "FAILED"
+            raise
+        finally:
+            spec = {
+                "tracking_uri": tracking_uri(cfg.logger.get("tracking_uri"), cfg.paths.root_dir),
+                "experiment": cfg.logger.task_experiment_name,
+                "artifact_location": artifact_location(cfg.logger.artifact_location),
+                "run_name": cfg.run_name,
+                "tags": {**all_tags, **pending.tags},
+                "params": pending.params,
+                "metrics": pending.metrics,
+                "texts": pending.texts,
+                "artifacts": pending.artifacts,
+                "status": status,
+                "start_ms": start_ms,
+                "end_ms": int(time.time() * 1000),
+            }
+            hand_off_run(spec, Path(cfg.paths.log_dir) / PENDING_FOLDER, task)
+        return
+    client, experiment = task_client(cfg)
     run_id = client.create_run(experiment, run_name=cfg.run_name, tags=all_tags).info.run_id
     try:
         yield TaskRun(client, run_id)
@@ -264,6 +349,75 @@ def task_run(
         client.set_terminated(run_id, status="FAILED")
         raise
     client.set_terminated(run_id)
+
+
+def hand_off_run(spec: Mapping[str, Any], folder: Path, task: str) -> Path:
+    """Write a pending run's ``spec`` (:func:`task_run`) into ``folder`` atomically and start a
+    detached process that logs it (:func:`log_pending_run`; its own session, so a signal to the
+    command's process group does not stop it); returns the spec's path."""
+    import json
+    import subprocess
+    import sys
+
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{task}-{time.strftime('%Y%m%d-%H%M%S')}-{os.getpid()}.json"
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(json.dumps(spec), encoding="utf-8")
+    tmp.replace(path)
+    with open(folder / "log.txt", "a", encoding="utf-8") as log:
+        subprocess.Popen(
+            [sys.executable, "-m", "prg.tracking", "log-pending", str(path)],
+            stdin=subprocess.DEVNULL,
+            stdout=log,
+            stderr=log,
+            start_new_session=True,
+        )
+    return path
+
+
+def log_pending_run(path: str | os.PathLike) -> str:
+    """Log the pending run that :func:`hand_off_run` wrote at ``path`` (tags, params and metrics
+    in one batch, texts, artifacts, its status and times), then delete the file; returns the run
+    id. A file that is not such a run is a :class:`~prg.errors.UsageError`; when logging fails
+    the partly logged run is deleted and the file kept, so it can be logged again."""
+    import json
+
+    from mlflow.entities import Metric, Param
+
+    path = Path(path)
+    try:
+        spec = json.loads(path.read_text(encoding="utf-8"))
+        uri, experiment_name = spec["tracking_uri"], spec["experiment"]
+        location, start_ms, end_ms = spec["artifact_location"], spec["start_ms"], spec["end_ms"]
+        run_name, tags, status = spec["run_name"], spec["tags"], spec["status"]
+        params, metrics = dict(spec["params"]), dict(spec["metrics"])
+        texts, artifacts = dict(spec["texts"]), [tuple(a) for a in spec["artifacts"]]
+    except (OSError, ValueError, KeyError, TypeError) as err:
+        raise UsageError(f"pending run {path}: not a pending run file ({err})") from None
+    missing = [folder for folder, _ in artifacts if not Path(folder).is_dir()]
+    if missing:  # MLflow would log an empty folder without a word
+        raise FileNotFoundError(f"the run's output folder {missing[0]} is gone")
+    client = mlflow_client(uri)
+    experiment = get_experiment_id(client, experiment_name, location)
+    run_id = client.create_run(
+        experiment, start_time=start_ms, run_name=run_name, tags=tags
+    ).info.run_id
+    try:
+        client.log_batch(
+            run_id,
+            metrics=[Metric(key, value, end_ms, 0) for key, value in metrics.items()],
+            params=[Param(key, value) for key, value in params.items()],
+        )
+        for name, text in texts.items():
+            client.log_text(run_id, text, name)
+        for folder, artifact_path in artifacts:
+            client.log_artifacts(run_id, folder, artifact_path)
+        client.set_terminated(run_id, status=status, end_time=end_ms)
+    except BaseException:
+        client.delete_run(run_id)  # no half-logged run; the kept file logs it whole next time
+        raise
+    path.unlink()
+    return run_id
 
 
 def mlflow_logger(
@@ -382,17 +536,40 @@ def move_store(
     return changed
 
 
-USAGE = "python -m prg.tracking move-store DB OLD_ARTIFACTS NEW_ARTIFACTS"
+USAGE = (
+    "python -m prg.tracking move-store DB OLD_ARTIFACTS NEW_ARTIFACTS"
+    " | python -m prg.tracking log-pending FILE"
+)
 
 
 def main(argv: list[str]) -> int:
-    """``python -m prg.tracking move-store mlruns.db /old/checkout/mlartifacts mlartifacts``."""
+    """``python -m prg.tracking move-store mlruns.db /old/checkout/mlartifacts mlartifacts``, or
+    ``python -m prg.tracking log-pending logs/pending-runs/write-....json``: log a run that a
+    command handed to the background (:func:`task_run`), again after a failure."""
     import sys
 
-    if len(argv) != 4 or argv[0] != "move-store":
+    moving = argv[:1] == ["move-store"] and len(argv) == 4
+    if not moving and not (argv[:1] == ["log-pending"] and len(argv) == 2):
         print(f"prg.tracking: error: usage: {USAGE}", file=sys.stderr)
         return 2
     try:
+        if not moving:
+            os.nice(10)  # behind the commands the user is waiting for
+            stamp = time.strftime("%Y-%m-%d %H:%M:%S")
+            try:
+                run_id = log_pending_run(argv[1])
+            except UsageError:
+                raise
+            except Exception as err:  # the store or an artifact: the file is kept for a retry
+                print(
+                    f"prg.tracking: error: {stamp} pending run {argv[1]} not logged"
+                    f" ({type(err).__name__}: {err}); the file is kept: run"
+                    f" `python -m prg.tracking log-pending {argv[1]}` again",
+                    file=sys.stderr,
+                )
+                return 1
+            print(f"{stamp} logged run {run_id} from {argv[1]}")
+            return 0
         changed = move_store(*argv[1:])
     except UsageError as err:
         print(f"prg.tracking: error: {err}", file=sys.stderr)

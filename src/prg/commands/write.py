@@ -15,7 +15,8 @@ channel; ``trajectories`` (a JSON file of per-letter pen strokes) is the T chann
 
 Writes ``word.json`` (points, segments, text, timing, DMP), ``word.png``, ``word.svg`` and
 ``dmp_rollout.csv``, ``motion.csv`` into ``out_dir`` (atomically, through a staging folder) and, with
-``mlflow=true``, an MLflow run holding them. By default every word gets a new folder,
+``mlflow=true``, an MLflow run holding them, logged by a background process once the word is
+written (``mlflow_background=false``: before the command returns; :func:`prg.tracking.task_run`). By default every word gets a new folder,
 ``outputs/write/<family>/<text>-<YYYYmmdd-HHMMSS>`` (``-2`` ... appended if it exists);
 ``out_dir=FOLDER`` names the folder (:func:`prg.files.word_folder`). The work is
 :class:`prg.writer.Writer`'s; this module reads the config and saves the outputs.
@@ -51,7 +52,13 @@ def write(cfg: DictConfig) -> tuple[WriteResult, Path]:
     folder_fields(cfg.out_dir)
     check_output(cfg.out_dir, "out_dir")
     writer = writer_from_config(cfg)
-    with task_run(cfg, "write", {"prg.family": writer.family}, enabled=cfg.mlflow) as run:
+    with task_run(
+        cfg,
+        "write",
+        {"prg.family": writer.family},
+        enabled=cfg.mlflow,
+        background=cfg.mlflow_background,
+    ) as run:
         result = writer.write(text, cfg.audio, cfg.images, cfg.trajectories)
         with word_folder(cfg.out_dir, result.word.text) as out_dir:
             result.save(out_dir, record=cfg.record)
@@ -76,7 +83,7 @@ def write(cfg: DictConfig) -> tuple[WriteResult, Path]:
 
 def _log_run(run, cfg: DictConfig, writer: Writer, result: WriteResult, out_dir: Path) -> None:
     word = result.word
-    run.client.set_tag(run.run_id, "prg.text", word.text)
+    run.set_tag("prg.text", word.text)
     params: dict[str, Any] = {
         "text": word.text,
         "family": result.family,

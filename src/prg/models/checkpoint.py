@@ -96,16 +96,23 @@ def _allowed(target: Any) -> bool:
 
 def load_model(path: str | os.PathLike) -> tuple[MultimodalVAE, dict[str, Any]]:
     """The trained model of a checkpoint (eval mode, CPU) and the checkpoint's extra entries
-    (``mlflow_run_id``, ``epoch``, ``global_step`` ... ; no weights)."""
-    from prg.models.module import PRGModule
+    (``mlflow_run_id``, ``epoch``, ``global_step`` ... ; no weights).
+
+    Built from the checkpoint's ``model`` hyper-parameters and the ``model.``-prefixed weights of
+    :class:`~prg.models.module.PRGModule`'s state dict, without the LightningModule: importing
+    Lightning costs a generating command more than the generation itself."""
+    from hydra.utils import instantiate
 
     ckpt = read_checkpoint(path)
+    prefix = "model."
+    weights = {k[len(prefix) :]: v for k, v in ckpt["state_dict"].items() if k.startswith(prefix)}
     try:
-        module = PRGModule(**ckpt["hyper_parameters"])
-        module.load_state_dict(ckpt["state_dict"])
+        model = instantiate(ckpt["hyper_parameters"]["model"], _convert_="all")
+        model.load_state_dict(weights)
     except Exception as err:  # wrong keys or shapes: written by another version of the code
         first = " ".join(str(err).split())[:200]
         raise UsageError(f"checkpoint {path} does not match this code's models: {first}") from None
-    module.on_load_checkpoint(ckpt)
+    if hasattr(model, "top_scale") and "top_scale" in ckpt:
+        model.top_scale = ckpt["top_scale"]
     info = {k: v for k, v in ckpt.items() if k in ("mlflow_run_id", "epoch", "global_step")}
-    return module.model.eval(), info
+    return model.eval(), info
