@@ -38,6 +38,12 @@ def test_writes_the_word_its_renderings_rollout_and_an_mlflow_run(tmp_path, chec
     )
     assert result.returncode == 0, result.stderr[-2000:]
     assert {p.name for p in out.iterdir()} == WORD_OUTPUTS
+    # the process ends without the interpreter's teardown (end_process): its log is all there
+    (log_file,) = tmp_path.glob("logs/write/runs/*/cli.log")
+    for log_text in (result.stdout, log_file.read_text()):
+        assert (
+            "wrote 'ab cd' with muse" in log_text and "recorded 'ab cd' as word.rrd" not in log_text
+        )
     word = WordTrajectory.from_json(out / "word.json")
     entities = read_entities(out / "word.rrd")
     assert {f"word/letters/{i}_{c}" for i, c in enumerate("abcd")} <= set(entities)

@@ -47,6 +47,7 @@ from prg.pipeline.word import WordTrajectory
 
 if TYPE_CHECKING:
     from prg.pipeline.speech import Transcript
+    from prg.recorder import RecorderProcess
 
 log = logging.getLogger(__name__)
 
@@ -125,20 +126,29 @@ class WriteResult:
     def text(self) -> str:
         return self.word.text
 
-    def save(self, folder: str | os.PathLike, record: bool = False) -> Path:
+    def save(
+        self,
+        folder: str | os.PathLike,
+        record: bool = False,
+        recorder: RecorderProcess | None = None,
+    ) -> Path:
         """``word.json``, ``word.png``, ``word.svg``, ``dmp_rollout.csv`` (the body's DMP
         rollout), ``motion.csv`` (the whole timed pen motion, delayed strokes included, with its
         pen-down flag: :func:`prg.sim.word_samples` at ``settings.samples_per_s``) and
         (``record``) the Rerun recording ``word.rrd`` into ``folder``, all or nothing (through a
         staging folder; other files already in ``folder`` are kept, but a ``word.rrd`` left
-        by an earlier word is removed when ``record`` is off)."""
+        by an earlier word is removed when ``record`` is off). With a ``recorder``
+        (:class:`prg.recorder.RecorderProcess`, started before the model was loaded) the
+        recording is made there, while this process writes the other files."""
         from prg.sim.writing import word_samples
 
         folder = Path(folder)
         with staged_outputs(folder, owned=WORD_FILES) as staging:
-            if record:
-                self.record(staging / "word.rrd")
             self.word.to_json(staging / "word.json")
+            if record and recorder is not None:
+                recorder.send(staging, self.rollout, self.recording_inputs())
+            elif record:
+                self.record(staging / "word.rrd")
             self.word.to_png(staging / "word.png")
             self.word.to_svg(staging / "word.svg")
             t = np.linspace(0.0, self.word.dmp.tau, len(self.rollout))
@@ -159,30 +169,34 @@ class WriteResult:
                 comments="",
                 fmt=["%.6f", "%.6f", "%.6f", "%d"],
             )
+            if record and recorder is not None:
+                recorder.wait()
         return folder
+
+    def recording_inputs(self) -> dict[str, Any]:
+        """What the recording shows besides the word and its rollout: the decoded ``letters``,
+        the letter ``images`` and the heard ``audio``, ``sample_rate`` and ``transcript``
+        (those given)."""
+        seen = self.perception
+        images = seen.inputs.get(IMAGE)
+        inputs: dict[str, Any] = {
+            "letters": self.letters,
+            "images": None if images is None else images.numpy(),
+        }
+        if seen.transcript is not None:
+            inputs |= {
+                "audio": seen.audio,
+                "sample_rate": SAMPLE_RATE,
+                "transcript": seen.transcript.text,
+            }
+        return inputs
 
     def record(self, path: str | os.PathLike) -> Path:
         """The Rerun recording of the word, its inputs and its DMP rollout
         (:func:`prg.recording.record_write`)."""
         from prg.recording import record_write
 
-        seen = self.perception
-        images = seen.inputs.get(IMAGE)
-        heard: dict[str, Any] = {}
-        if seen.transcript is not None:
-            heard = {
-                "audio": seen.audio,
-                "sample_rate": SAMPLE_RATE,
-                "transcript": seen.transcript.text,
-            }
-        return record_write(
-            path,
-            self.word,
-            self.rollout,
-            letters=self.letters,
-            images=None if images is None else images.numpy(),
-            **heard,
-        )
+        return record_write(path, self.word, self.rollout, **self.recording_inputs())
 
 
 class Writer:

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+from contextlib import ExitStack
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -37,6 +38,7 @@ from prg.commands.settings import checkpoint_path, writer_from_config
 from prg.tracking import task_run
 
 if TYPE_CHECKING:  # torch: imported by the task, once the command line is checked
+    from prg.recorder import RecorderProcess
     from prg.writer import Writer, WriteResult
 
 log = logging.getLogger(__name__)
@@ -45,12 +47,24 @@ log = logging.getLogger(__name__)
 def write(cfg: DictConfig) -> tuple[WriteResult, Path]:
     """Task: write the word given through the config's channels and save it, its renderings and
     its DMP rollout (and an MLflow run)."""
-    from prg.files import folder_fields, word_folder
+    from prg.files import folder_fields
+    from prg.recorder import RecorderProcess
 
     check_values(cfg)
     text = literal_text(cfg.text, "text")
     folder_fields(cfg.out_dir)
     check_output(cfg.out_dir, "out_dir")
+    with ExitStack() as stack:
+        # Rerun's imports, on the second core while this process loads torch and the model
+        recorder = stack.enter_context(RecorderProcess()) if cfg.record else None
+        return _write(cfg, text, recorder)
+
+
+def _write(
+    cfg: DictConfig, text: str | None, recorder: RecorderProcess | None
+) -> tuple[WriteResult, Path]:
+    from prg.files import word_folder
+
     writer = writer_from_config(cfg)
     with task_run(
         cfg,
@@ -61,7 +75,7 @@ def write(cfg: DictConfig) -> tuple[WriteResult, Path]:
     ) as run:
         result = writer.write(text, cfg.audio, cfg.images, cfg.trajectories)
         with word_folder(cfg.out_dir, result.word.text) as out_dir:
-            result.save(out_dir, record=cfg.record)
+            result.save(out_dir, record=cfg.record, recorder=recorder)
         word = result.word
         log.info(
             "wrote %r with %s in %.0f ms: %d points, %.1f cm, %.1f s, DMP %d bases, "
@@ -107,7 +121,7 @@ def _log_run(run, cfg: DictConfig, writer: Writer, result: WriteResult, out_dir:
     run.log_artifacts(out_dir, "word")
 
 
-main = hydra_command(write, "write", "prg-write")
+main = hydra_command(write, "write", "prg-write", fast_exit=True)
 
 if __name__ == "__main__":
     main()

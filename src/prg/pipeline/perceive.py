@@ -41,7 +41,6 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
-from scipy import ndimage
 
 from prg.data.preprocess import TRAJ_LAYOUT, preprocess_stroke
 from prg.errors import UsageError
@@ -230,6 +229,8 @@ def ink_intensity(image: np.ndarray, name: str = "image") -> np.ndarray:
 
 def _ink_mask(ink: np.ndarray, level: float) -> np.ndarray:
     """Pixels at or above ``level``, without specks (components < max(2 px, 0.5 % of the ink))."""
+    from scipy import ndimage  # here: writing from text never needs it
+
     mask = ink >= level
     labels, n = ndimage.label(mask, structure=np.ones((3, 3)))
     if n > 1:
@@ -296,6 +297,7 @@ def perceive_letter_image(
     ndarray, shape (size, size), float32 in [0, 1]
     """
     from PIL import Image
+    from scipy import ndimage  # here: writing from text never needs it
 
     ink = ink_intensity(image, name)
     mask = _ink_mask(ink, NOISE_LEVEL)
@@ -397,6 +399,8 @@ def segment_word_image(
     UsageError
         If the image is malformed or blank.
     """
+    from scipy import ndimage  # here: writing from text never needs it
+
     ink = ink_intensity(image, name)
     mask = _ink_mask(ink, _SEGMENT_LEVEL)
     labels, _ = ndimage.label(mask, structure=np.ones((3, 3)))

@@ -482,10 +482,10 @@ def record_write(
             log_decoded(rec, raw, names)
         log_word(rec, word)
         log_rollout(rec, pts, t, down)
-    log.info(
-        "recorded %r to %s in %.0f ms (%d rollout samples)",
+    log.info(  # the file's name only: callers may write into a staging folder, renamed later
+        "recorded %r as %s in %.0f ms (%d rollout samples)",
         word.text,
-        path,
+        Path(path).name,
         (time.perf_counter() - start) * 1000,
         len(pts),
     )
