@@ -41,7 +41,7 @@ def test_prg_write_answers_before_importing_torch_and_writes_nothing(tmp_path, a
     env = {"PYTHONPROFILEIMPORTTIME": "1", "PRG_ROOT": str(tmp_path / "root")}
     result = run_cli("prg-write", *args, cwd=tmp_path, env=env)
     modules = imported_modules(result.stderr)
-    assert "prg.commands.write" in modules  # the report is there
+    assert "prg.commands.entry" in modules  # the report is there
     assert {"torch", "numpy", "scipy", "lightning", "mlflow", "rerun"}.isdisjoint(modules)
     said = [line for line in result.stderr.splitlines() if "import time:" not in line]
     if expected is None:
@@ -93,3 +93,20 @@ def test_help_says_what_the_command_does_its_options_and_an_example_that_compose
         parent = key.rpartition(".")[0]
         known = OmegaConf.select(cfg, key, default="?missing") != "?missing"
         assert known or key in groups or OmegaConf.select(cfg, parent) is not None, key
+
+
+@pytest.mark.parametrize("command", [c for c in HYDRA_COMMANDS if c != "prg-write"])
+def test_every_command_answers_a_typo_before_importing_its_task(tmp_path, command):
+    """The console scripts are made in prg.commands.entry, which names each task by its module:
+    the module (and torch, Lightning, MLflow with it) is imported only once the command line
+    is checked."""
+    env = {"PYTHONPROFILEIMPORTTIME": "1", "PRG_ROOT": str(tmp_path / "root")}
+    result = run_cli(command, "txt=hello", cwd=tmp_path, env=env)
+    modules = imported_modules(result.stderr)
+    assert "prg.commands.entry" in modules  # the report is there
+    task_module = f"prg.commands.{command.removeprefix('prg-')}"
+    assert {task_module, "torch", "lightning", "mlflow", "rerun"}.isdisjoint(modules)
+    said = [line for line in result.stderr.splitlines() if "import time:" not in line]
+    assert result.returncode == 2 and len(said) == 1, said
+    assert said[0].startswith(f"{command}: error: unknown key txt"), said
+    assert list(tmp_path.iterdir()) == []

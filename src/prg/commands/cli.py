@@ -353,10 +353,20 @@ def _exit_code(stop: SystemExit) -> int:
     return 1
 
 
+def _resolve(task: Callable[[Any], Any] | str) -> Callable[[Any], Any]:
+    if callable(task):
+        return task
+    import importlib
+
+    module, _, function = task.partition(":")
+    return getattr(importlib.import_module(module), function)
+
+
 def hydra_command(
-    task: Callable[[Any], Any], config_name: str, command: str, fast_exit: bool = False
+    task: Callable[[Any], Any] | str, config_name: str, command: str, fast_exit: bool = False
 ) -> Callable[[], None]:
-    """Build a console-script ``main`` that runs ``task(cfg)`` under ``@hydra.main``.
+    """Build a console-script ``main`` that runs ``task(cfg)`` under ``@hydra.main``; ``task``
+    may be named ``"module:function"``, imported when the task starts (:mod:`prg.commands.entry`).
 
     ``fast_exit``: a command whose answer is awaited (``prg-write``) ends its own process
     through :func:`end_process` when it is done, successfully or not."""
@@ -368,7 +378,7 @@ def hydra_command(
         route_library_logs()
         logging.captureWarnings(True)  # library warnings to the log too
         try:
-            task(cfg)
+            _resolve(task)(cfg)
         except PRGError as err:
             fail(command, str(err), err.exit_code)
         except OSError as err:

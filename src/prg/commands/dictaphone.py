@@ -32,7 +32,7 @@ import numpy as np
 from omegaconf import DictConfig
 
 from prg.checks import check_values, literal_words
-from prg.commands.cli import check_output, hydra_command
+from prg.commands.cli import check_output
 from prg.commands.settings import checkpoint_path, generate_settings, node, speech_settings
 from prg.data.datamodule import check_model_shapes
 from prg.data.store import load_split
@@ -129,7 +129,7 @@ def _log_run(run, cfg: DictConfig, metrics: dict, out_dir: Path) -> None:
     run.log_artifacts(out_dir, "dictaphone")
 
 
-main = hydra_command(dictaphone, "dictaphone", "prg-dictaphone")
-
 if __name__ == "__main__":
-    main()
+    from prg.commands.entry import dictaphone
+
+    dictaphone()

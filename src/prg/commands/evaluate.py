@@ -24,7 +24,7 @@ from pathlib import Path
 from omegaconf import DictConfig, OmegaConf
 
 from prg.checks import check_values
-from prg.commands.cli import check_output, hydra_command
+from prg.commands.cli import check_output
 from prg.commands.settings import build, node
 from prg.errors import UsageError
 from prg.evaluation.classifiers import ensure_classifiers
@@ -167,7 +167,7 @@ def _log_run(run: TaskRun, result: Evaluation, models: dict[str, LoadedModel], c
     run.log_artifacts(result.report_dir, "reports")
 
 
-main = hydra_command(evaluate, "evaluate", "prg-evaluate")
-
 if __name__ == "__main__":
-    main()
+    from prg.commands.entry import evaluate
+
+    evaluate()

@@ -28,7 +28,7 @@ from typing import Any
 from omegaconf import DictConfig, OmegaConf
 
 from prg.checks import check_values
-from prg.commands.cli import check_output, hydra_command
+from prg.commands.cli import check_output
 from prg.commands.settings import node
 from prg.errors import SettingsError, UsageError
 from prg.files import folder_fields, word_folder
@@ -114,7 +114,7 @@ def export(cfg: DictConfig) -> tuple[Any, Path]:
     return result, out_dir
 
 
-main = hydra_command(export, "export", "prg-export")
-
 if __name__ == "__main__":
-    main()
+    from prg.commands.entry import export
+
+    export()

@@ -15,7 +15,7 @@ import logging
 from omegaconf import DictConfig
 
 from prg.checks import check_values
-from prg.commands.cli import check_output, hydra_command
+from prg.commands.cli import check_output
 from prg.data.build import BuildResult, build_dataset
 
 log = logging.getLogger(__name__)
@@ -45,7 +45,7 @@ def prepare(cfg: DictConfig) -> BuildResult:
     return result
 
 
-main = hydra_command(prepare, "prepare", "prg-prepare")
-
 if __name__ == "__main__":
-    main()
+    from prg.commands.entry import prepare
+
+    prepare()

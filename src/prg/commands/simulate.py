@@ -35,7 +35,7 @@ from typing import Any
 from omegaconf import DictConfig, OmegaConf
 
 from prg.checks import check_values, literal_text
-from prg.commands.cli import check_output, hydra_command
+from prg.commands.cli import check_output
 from prg.commands.settings import simulation_settings, writer_from_config
 from prg.errors import UsageError
 from prg.files import folder_fields, staged_outputs, word_folder
@@ -135,7 +135,7 @@ def _log_run(run, cfg: DictConfig, result, out_dir: Path, given: Path | None) ->
     run.log_artifacts(out_dir, "simulate")
 
 
-main = hydra_command(simulate, "simulate", "prg-simulate")
-
 if __name__ == "__main__":
-    main()
+    from prg.commands.entry import simulate
+
+    simulate()

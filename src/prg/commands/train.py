@@ -38,7 +38,7 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
 from prg.checks import check_values
-from prg.commands.cli import check_output, hydra_command
+from prg.commands.cli import check_output
 from prg.commands.settings import build
 from prg.data.datamodule import PRGDataModule, read_manifest
 from prg.errors import PRGError, UsageError
@@ -251,7 +251,7 @@ def _export(folder: Path, best: str, metrics: dict[str, float], run_id: str, cfg
         )
 
 
-main = hydra_command(train, "train", "prg-train")
-
 if __name__ == "__main__":
-    main()
+    from prg.commands.entry import train
+
+    train()

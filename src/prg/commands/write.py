@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, Any
 from omegaconf import DictConfig
 
 from prg.checks import check_values, literal_text
-from prg.commands.cli import check_output, hydra_command
+from prg.commands.cli import check_output
 from prg.commands.settings import checkpoint_path, writer_from_config
 from prg.tracking import task_run
 
@@ -121,7 +121,7 @@ def _log_run(run, cfg: DictConfig, writer: Writer, result: WriteResult, out_dir:
     run.log_artifacts(out_dir, "word")
 
 
-main = hydra_command(write, "write", "prg-write", fast_exit=True)
-
 if __name__ == "__main__":
-    main()
+    from prg.commands.entry import write
+
+    write()
