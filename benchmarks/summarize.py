@@ -282,10 +282,9 @@ def _startup(d: dict) -> list[Row]:
             "python -c 'import torch'",
             f"{d['floor_s']:.2f} s",
             r["ratio"],
-            f"<= {r['target_ratio']:g}",
+            f"<= {r['target_ratio']:g}" if r["target_ratio"] is not None else "-",
         )
-        for r in d["rows"]
-        if r["target_ratio"] is not None
+        for r in d["rows"][1:]  # the first row is the floor itself
     ]
 
 

@@ -220,6 +220,7 @@ CASES = [
     case("write-noise-photo", "prg-write", "text=cat images={noise_jpg}", 2, "3 letters"),
     case("write-truncated-ckpt", "prg-write", "text=hi ckpt={truncated_ckpt}", 2, "truncated"),
     case("write-zero-speed", "prg-write", "text=hi generate.speed_cm_s=0", 2, "speed"),
+    case("write-zero-threads", "prg-write", "text=hi threads=0", 2, "threads must be"),
     case("write-unknown-flag", "prg-write", "text=hi --frobnicate", 2, "unknown option --frob"),
     case("train-bad-flag-value", "prg-train", "--cfg everything", 2, "invalid choice"),
     case("simulate-flag-missing-value", "prg-simulate", "--config-name", 2, "--config-name"),

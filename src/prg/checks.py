@@ -210,6 +210,7 @@ RANGES: dict[str, Range] = {
     "data.synthetic.sample_variation": non_negative(1),
     "data.synthetic.points_per_unit": positive(1000),
     "workers": count(1, 256),
+    "threads": count(1, 256),
     # prg-train
     "seed": SEED,
     "model.batch_size": count(1),

@@ -129,6 +129,10 @@ def writer_from_config(cfg: DictConfig) -> Writer:
 
     path = checkpoint_path(cfg)  # before the settings: a missing model is answered first
     generate, speech = generate_settings(cfg), speech_settings(cfg)
+    if cfg.get("threads"):
+        import torch
+
+        torch.set_num_threads(int(cfg.threads))
     return Writer.from_checkpoint(path, settings=generate, speech=speech, on_unknown=cfg.on_unknown)
 
 
