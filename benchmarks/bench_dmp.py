@@ -36,7 +36,6 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import json
 import os
 import platform
 import statistics
@@ -49,6 +48,7 @@ import numpy as np
 import scipy
 from threadpoolctl import threadpool_limits
 
+from prg.files import write_json
 from prg.pipeline.dmp import fit_dmp, rollout
 
 RESULTS = Path(__file__).parent / "results"
@@ -259,7 +259,7 @@ def main() -> None:
         )
     RESULTS.mkdir(exist_ok=True)
     out = RESULTS / "bench_dmp.json"
-    out.write_text(json.dumps(report, indent=2) + "\n")
+    write_json(out, report)
     print(f"\nwrote {out}")
 
 

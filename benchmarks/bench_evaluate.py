@@ -34,6 +34,7 @@ from pathlib import Path
 import torch
 
 from prg.evaluation.likelihood import estimate_cell
+from prg.files import write_json
 from prg.models.muse import MUSE
 
 RESULTS = Path(__file__).parent / "results"
@@ -178,7 +179,7 @@ def main() -> None:
         "peak_memory_k5000": memory,
     }
     path = RESULTS / "bench_evaluate.json"
-    path.write_text(json.dumps(payload, indent=2) + "\n")
+    write_json(path, payload)
     print(f"\nwrote {path}")
 
 

@@ -11,7 +11,6 @@ Prints a table and writes ``benchmarks/results/bench_prepare.json``.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import tempfile
@@ -24,6 +23,7 @@ from prg.commands.cli import compose_config
 from prg.data.build import build_dataset
 from prg.data.preprocess import _to_image_coords, render_batch
 from prg.data.store import load_split
+from prg.files import write_json
 
 BUDGET_S = 300.0
 RESULTS = Path(__file__).parent / "results"
@@ -125,7 +125,7 @@ def main() -> None:
     )
     RESULTS.mkdir(exist_ok=True)
     out = RESULTS / "bench_prepare.json"
-    out.write_text(json.dumps(report, indent=2) + "\n")
+    write_json(out, report)
     print(f"\nwrote {out}")
 
 

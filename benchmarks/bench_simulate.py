@@ -25,7 +25,6 @@ Prints a table and writes ``benchmarks/results/bench_simulate.json``.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import time
@@ -34,6 +33,7 @@ from pathlib import Path
 
 from prg.commands.cli import compose_config
 from prg.commands.settings import simulation_settings
+from prg.files import write_json
 from prg.pipeline.word import WordTrajectory
 from prg.sim import font_word, simulate_word
 
@@ -161,27 +161,24 @@ def main() -> None:
 
     RESULTS.mkdir(exist_ok=True)
     out = RESULTS / "bench_simulate.json"
-    out.write_text(
-        json.dumps(
-            {
-                "benchmark": "bench_simulate",
-                "words_from": source,
-                "settings": "conf/simulate.yaml defaults (240 Hz physics, 60 Hz IK waypoints)",
-                "references": {
-                    "null_space": "PyBullet IK with rest pose and limits alone",
-                    "plain": "PyBullet IK alone, seeded with the previous solution",
-                    "ratio": "reference tracking mean / refined tracking mean",
-                },
-                "machine": {
-                    "platform": platform.platform(),
-                    "cpus": os.cpu_count(),
-                    "python": platform.python_version(),
-                },
-                "rows": rows,
+    write_json(
+        out,
+        {
+            "benchmark": "bench_simulate",
+            "words_from": source,
+            "settings": "conf/simulate.yaml defaults (240 Hz physics, 60 Hz IK waypoints)",
+            "references": {
+                "null_space": "PyBullet IK with rest pose and limits alone",
+                "plain": "PyBullet IK alone, seeded with the previous solution",
+                "ratio": "reference tracking mean / refined tracking mean",
             },
-            indent=2,
-        )
-        + "\n"
+            "machine": {
+                "platform": platform.platform(),
+                "cpus": os.cpu_count(),
+                "python": platform.python_version(),
+            },
+            "rows": rows,
+        },
     )
     print(f"\nwrote {out.relative_to(ROOT)}")
 

@@ -30,7 +30,6 @@ Prints a table and writes ``benchmarks/results/bench_speech.json``.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import shutil
@@ -43,6 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from prg.errors import UsageError
+from prg.files import write_json
 from prg.pipeline.speech import (
     DEFAULT_WAV2VEC2,
     SpeechSettings,
@@ -219,9 +219,7 @@ def main() -> None:
     }
     RESULTS.mkdir(exist_ok=True)
     out = RESULTS / "bench_speech.json"
-    tmp_out = out.with_suffix(".json.tmp")
-    tmp_out.write_text(json.dumps(report, indent=2) + "\n")
-    tmp_out.replace(out)
+    write_json(out, report)
     print(f"\nwrote {out}")
 
 

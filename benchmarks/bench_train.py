@@ -57,13 +57,14 @@ import torch
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
+from prg.checks import FAMILIES
 from prg.commands.cli import compose_config
 from prg.data.datamodule import PRGDataModule
+from prg.files import write_json
 from prg.models.module import PRGModule
 
 RESULTS = Path(__file__).parent / "results"
 REPO = Path(__file__).resolve().parents[1]
-FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse")
 TARGET = 0.9
 PARTS = ("throughput", "techniques", "quality")
 
@@ -533,9 +534,7 @@ def main() -> None:
         "load_avg_at_end": [round(x, 2) for x in os.getloadavg()],
     }
     RESULTS.mkdir(exist_ok=True)
-    tmp = out.with_name(f".{out.name}.tmp")  # atomic: a killed run leaves the old JSON whole
-    tmp.write_text(json.dumps(report, indent=2) + "\n")
-    os.replace(tmp, out)
+    write_json(out, report)  # atomic: a killed run leaves the old JSON whole
     print(f"\nwrote {out}")
 
 

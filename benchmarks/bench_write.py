@@ -29,7 +29,6 @@ Prints a table and writes ``benchmarks/results/bench_write.json``.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import random
@@ -46,6 +45,7 @@ from omegaconf import OmegaConf
 
 from prg.commands.cli import compose_config
 from prg.errors import UsageError
+from prg.files import write_json
 from prg.models.checkpoint import load_model
 from prg.pipeline.compose import GenerateSettings
 from prg.pipeline.decode import label_inputs, usable_inputs
@@ -237,9 +237,7 @@ def main() -> None:
     }
     RESULTS.mkdir(exist_ok=True)
     out = RESULTS / "bench_write.json"
-    tmp = out.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(report, indent=2) + "\n")
-    tmp.replace(out)
+    write_json(out, report)
     print(f"\nwrote {out}")
 
 

@@ -52,13 +52,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from prg.checks import FAMILIES
 from prg.commands.cli import handle_signals
 from prg.errors import PRGError, UsageError
 from prg.files import write_json
 from prg.signals import Interrupted, deferred
 
 COMMAND = "prg.commands.paper_scale"
-FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse")
 PROFILES = ("paper", "converged")
 DATA_NAME = "synthetic"
 # The Lightning progress bar is redrawn every this many steps: often enough to follow, rare

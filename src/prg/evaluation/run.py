@@ -34,6 +34,7 @@ import numpy as np
 import torch
 
 from prg.alphabet import NUM_CLASSES
+from prg.checks import FAMILIES
 from prg.data.datamodule import check_model_shapes
 from prg.data.store import load_split
 from prg.errors import UsageError
@@ -62,7 +63,6 @@ from prg.models.modalities import LABEL, LETTER, MODALITIES, NAMES, TRAJ, letter
 
 log = logging.getLogger(__name__)
 
-FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse")
 # Inputs from which decoded letters are scored for roughness: each single non-trajectory
 # modality a model accepts (labels: cvae, avae_ts, muse; images: avae_ti, muse).
 ROUGHNESS_INPUTS = tuple((m,) for m in NAMES if m != TRAJ)
