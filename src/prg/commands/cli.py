@@ -375,10 +375,11 @@ def hydra_command(
     @hydra.main(config_path=str(config_dir()), config_name=config_name, version_base="1.3")
     def _run(cfg) -> None:
         let_go()  # the config is composed: a signal held meanwhile stops the task now
+        run_task = _resolve(task)  # before routing: libraries add their log handlers on import
         route_library_logs()
         logging.captureWarnings(True)  # library warnings to the log too
         try:
-            _resolve(task)(cfg)
+            run_task(cfg)
         except PRGError as err:
             fail(command, str(err), err.exit_code)
         except OSError as err:
