@@ -2,8 +2,8 @@
 
     python docs/make_figures.py
 
-docs/figures/word.png: "little" from its labels (conf/write.yaml's settings, as `prg-write
-text=little`): letters, connection strokes, delayed strokes, the DMP's rollout.
+docs/figures/word.png: "jelly" from its labels (conf/write.yaml's settings, as `prg-write
+text=jelly`): letters, connection strokes, delayed strokes, the DMP's rollout.
 docs/figures/marks.png: the geometric check of the delayed strokes (dots of i/j, bars of t/f) on
 the 62 classes and 200 random words (prg.evaluation.marks). docs/figures/robot.png: the Panda
 writing "joy" (as `prg-simulate text=joy scale=6`), a TinyRenderer 3/4 view with a close-up of
@@ -23,7 +23,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 CKPT = ROOT / "models" / "muse" / "model.ckpt"
 OUT = ROOT / "docs" / "figures"
-WORD, ROBOT_WORD, SCALE = "little", "joy", 6.0  # SCALE: the robot's word, enlarged to be seen
+WORD, ROBOT_WORD, SCALE = "jelly", "joy", 6.0  # SCALE: the robot's word, enlarged to be seen
 EYE, TARGET = (-0.4, 1.0, 1.45), (0.42, 0.02, 0.85)  # world (m): the arm, table and page
 CLOSE_EYE, CLOSE_TARGET = (0.31, 0.11, 0.82), (0.55, -0.01, 0.6255)  # the page, near the pen
 LIGHT, SUPERSAMPLE, INK_MM = (-0.2, 0.5, 1.0), 2, 3.5  # ink drawn wide to show at this size
