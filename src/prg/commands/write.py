@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-from contextlib import ExitStack
+from contextlib import nullcontext
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -54,9 +54,8 @@ def write(cfg: DictConfig) -> tuple[WriteResult, Path]:
     text = literal_text(cfg.text, "text")
     folder_fields(cfg.out_dir)
     check_output(cfg.out_dir, "out_dir")
-    with ExitStack() as stack:
-        # Rerun's imports, on the second core while this process loads torch and the model
-        recorder = stack.enter_context(RecorderProcess()) if cfg.record else None
+    # Rerun's imports, on the second core while this process loads torch and the model
+    with RecorderProcess() if cfg.record else nullcontext() as recorder:
         return _write(cfg, text, recorder)
 
 
