@@ -304,6 +304,59 @@ def test_too_long_audio():
         recognise(noise, sample_rate=16000)
 
 
+def _write_with_pyav(path: Path, samples: np.ndarray, rate: int, fmt: str) -> Path:
+    """int16 mono ``samples`` as PCM in the container ``fmt`` (e.g. "nut", "matroska")."""
+    import av
+
+    with av.open(str(path), "w", format=fmt) as container:
+        stream = container.add_stream("pcm_s16le", rate=rate, layout="mono")
+        for lo in range(0, len(samples), 4096):  # packets of 4096 samples, as a recorder writes
+            frame = av.AudioFrame.from_ndarray(
+                samples[None, lo : lo + 4096], format="s16", layout="mono"
+            )
+            frame.rate = rate
+            for packet in stream.encode(frame):
+                container.mux(packet)
+        for packet in stream.encode(None):
+            container.mux(packet)
+    return path
+
+
+def test_long_file_without_a_stated_duration_is_refused_while_decoding(tmp_path, monkeypatch):
+    """When the header states no duration (a live stream's, or the reader finds none: stood in
+    for by ``_header_seconds`` returning None), only decoding finds the file too long: the
+    decoder stops at max_seconds instead of decoding (and resampling) all of it."""
+    import av
+
+    from prg.pipeline.speech import audio as audio_module
+
+    rate = 48_000
+    samples = (np.random.default_rng(0).normal(0, 3000, rate * 120)).astype(np.int16)
+    path = _write_with_pyav(tmp_path / "long.nut", samples, rate, "nut")
+    monkeypatch.setattr(audio_module, "_header_seconds", lambda path: None)
+    seen = []
+    original = av.AudioResampler.resample
+
+    def counting(self, frame):  # counts what was decoded; the real resampler does the work
+        out = original(self, frame)
+        seen.extend(len(f.to_ndarray().reshape(-1)) for f in out)
+        return out
+
+    monkeypatch.setattr(av.AudioResampler, "resample", counting)
+    with pytest.raises(UsageError, match=r"long\.nut: audio is longer than 5 s: accepted"):
+        load_audio(path, max_seconds=5)
+    assert 5 * SAMPLE_RATE < sum(seen) < 7 * SAMPLE_RATE
+    short = _write_with_pyav(tmp_path / "short.nut", samples[: rate * 2], rate, "nut")
+    assert len(load_audio(short, max_seconds=5)) == pytest.approx(2 * SAMPLE_RATE, abs=400)
+
+
+def test_long_wav_is_refused_from_its_header(tmp_path):
+    path = tmp_path / "long.wav"
+    soundfile.write(str(path), np.zeros(16000 * 40, np.int16), 16000)
+    with pytest.raises(UsageError, match=r"long\.wav: audio is 40\.0 s long: accepted"):
+        load_audio(path, max_seconds=30)
+
+
 def test_nan_audio():
     with pytest.raises(UsageError, match="NaN or infinite"):
         recognise(np.full(1000, np.nan), sample_rate=16000)

@@ -92,9 +92,12 @@ def rms_dbfs(samples: np.ndarray) -> float:
     return 20.0 * math.log10(rms) if rms > 0 else -math.inf
 
 
-def _too_long(name: str, seconds: float, max_seconds: float) -> UsageError:
+def _too_long(name: str, seconds: float | None, max_seconds: float) -> UsageError:
+    """The error for audio longer than ``max_seconds`` (``seconds``: its length, None when it was
+    not decoded to the end)."""
+    length = f"{seconds:.1f} s long" if seconds is not None else f"longer than {max_seconds:g} s"
     return UsageError(
-        f"{name}: audio is {seconds:.1f} s long: accepted are clips up to "
+        f"{name}: audio is {length}: accepted are clips up to "
         f"speech.max_seconds={max_seconds:g} s (one word or a short phrase)"
     )
 
@@ -133,25 +136,59 @@ def _read_file(path: Path, max_seconds: float | None = None) -> tuple[np.ndarray
     except ImportError:
         raise UsageError(f"reading audio files needs soundfile: {INSTALL}") from None
     try:
-        data, rate = soundfile.read(str(path), dtype="float32", always_2d=True)
-        return data, int(rate)
+        with soundfile.SoundFile(str(path)) as sound:
+            rate = int(sound.samplerate)
+            cap = sound.frames if max_seconds is None else math.floor(max_seconds * rate) + 1
+            data = sound.read(frames=min(sound.frames, cap), dtype="float32", always_2d=True)
+        if max_seconds is not None and len(data) > max_seconds * rate:
+            raise _too_long(str(path), None, max_seconds)
+        return data, rate
     except (soundfile.LibsndfileError, RuntimeError, TypeError) as err:
         sf_error = err
     if path.suffix.lower() in SNDFILE_SUFFIXES:
         raise UsageError(f"{path}: cannot read audio ({sf_error})")
-    try:  # MP3, M4A, WebM, ...: FFmpeg through PyAV (brought by faster-whisper)
-        from faster_whisper.audio import decode_audio
+    return _decode_with_ffmpeg(path, max_seconds)
+
+
+def _decode_with_ffmpeg(path: Path, max_seconds: float | None) -> tuple[np.ndarray, int]:
+    """(16 kHz mono samples, 16 000) of a file FFmpeg decodes (MP3, M4A, WebM, ...), through PyAV.
+
+    Decoded frame by frame, so that a file longer than ``max_seconds`` is refused as soon as
+    that much has been decoded, also when its header states no duration (a raw stream), rather
+    than after decoding it whole (``faster_whisper.audio.decode_audio`` has no such limit).
+    """
+    try:
+        import av
     except ImportError:
         raise UsageError(
             f"{path}: not a WAV/FLAC/OGG file, and other formats need PyAV: {INSTALL}"
         ) from None
+    limit = math.inf if max_seconds is None else max_seconds * SAMPLE_RATE
+    chunks, total = [], 0
     try:
-        return decode_audio(str(path), sampling_rate=SAMPLE_RATE), SAMPLE_RATE
+        with av.open(str(path)) as container:
+            if not container.streams.audio:
+                raise ValueError("no audio stream")
+            stream = container.streams.audio[0]
+            resampler = av.AudioResampler(format="flt", layout="mono", rate=SAMPLE_RATE)
+            for frame in container.decode(stream):
+                for out in resampler.resample(frame):
+                    chunk = out.to_ndarray().reshape(-1)
+                    chunks.append(chunk)
+                    total += len(chunk)
+                if total > limit:
+                    raise _too_long(str(path), None, max_seconds)
+            for out in resampler.resample(None):
+                chunks.append(out.to_ndarray().reshape(-1))
+    except UsageError:
+        raise
     except Exception as err:
         raise UsageError(
             f"{path}: not an audio file that can be read (accepted: WAV, FLAC, OGG, and "
             f"formats FFmpeg decodes such as MP3); {first_line(err)}"
         ) from None
+    samples = np.concatenate(chunks) if chunks else np.zeros(0, np.float32)
+    return samples.astype(np.float32, copy=False), SAMPLE_RATE
 
 
 def load_audio(
