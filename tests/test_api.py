@@ -90,3 +90,28 @@ def test_saving_a_word_into_a_used_folder_leaves_no_stale_recording(
     assert not (folder / "word.rrd").exists()  # the recording of "ab" would sit beside "cd"
     assert (folder / "notes.txt").read_text() == "the user's own file\n"
     assert WordTrajectory.from_json(folder / "word.json").text == "cd"
+
+
+def test_a_warm_writer_decodes_each_label_once_and_gives_the_same_letters(
+    untrained_muse_checkpoint,
+):
+    """Letters from labels alone at temperature 0 are decoded once per writer and reused; they
+    match a fresh writer's to float32 rounding, and sampling (temperature > 0) is not reused."""
+    from dataclasses import replace
+
+    from prg import Writer
+    from prg.pipeline.decode import decode_letters, label_inputs
+
+    writer = Writer.from_checkpoint(untrained_muse_checkpoint)
+    cat = writer.write(text="cat").letters
+    act = writer.write(text="act").letters
+    np.testing.assert_array_equal(act, cat[[1, 0, 2]])  # the same arrays, reused
+    fresh = Writer.from_checkpoint(untrained_muse_checkpoint).write(text="act").letters
+    np.testing.assert_allclose(act, fresh, atol=1e-5)
+    s = writer.settings
+    alone = decode_letters(writer.model, label_inputs("act"), 0.0, s.seed, s.impute_steps)
+    np.testing.assert_allclose(act, alone, atol=1e-5)
+    writer.settings = replace(s, temperature=1.0, seed=1)
+    sampled = writer.write(text="cat").letters
+    writer.settings = replace(s, temperature=1.0, seed=2)
+    assert np.abs(writer.write(text="cat").letters - sampled).max() > 1e-3

@@ -29,6 +29,7 @@ def recognise(
     audio: str | os.PathLike | np.ndarray,
     params: SpeechSettings | None = None,
     sample_rate: int | None = None,
+    name: str | None = None,
 ) -> Transcript:
     """Recognise one spoken word (or short phrase).
 
@@ -40,6 +41,9 @@ def recognise(
         Defaults: whisper, its offline default model, no lexicon.
     sample_rate : int, optional
         The array's sample rate in Hz (arrays only).
+    name : str, optional
+        What error messages call an array (e.g. the file it was read from); default
+        "audio array".
 
     Returns
     -------
@@ -52,7 +56,10 @@ def recognise(
         letters, an unknown backend, a missing model or optional dependency.
     """
     params = SpeechSettings() if params is None else params
-    name = str(audio) if isinstance(audio, str | os.PathLike) else "audio array"
+    if isinstance(audio, str | os.PathLike):
+        name = str(audio)
+    elif name is None:
+        name = "audio array"
     samples = load_audio(audio, sample_rate, params.max_seconds)
     check_audio(samples, params, name)
     recogniser = get_recogniser(params.backend, params.model)
@@ -95,6 +102,7 @@ def perceive_speech(
     audio: str | os.PathLike | np.ndarray,
     params: SpeechSettings | None = None,
     sample_rate: int | None = None,
+    name: str | None = None,
 ) -> tuple[str, Transcript]:
     """phi_S: audio to the text to write (and the transcript it came from).
 
@@ -105,7 +113,7 @@ def perceive_speech(
         map to class labels with :func:`prg.alphabet.text_to_labels`.
     transcript : Transcript
     """
-    transcript = recognise(audio, params, sample_rate)
+    transcript = recognise(audio, params, sample_rate, name)
     for part in transcript.word.split(" "):
         text_to_labels(part)  # guaranteed by transcript_to_word; fails loudly if not
     return transcript.word, transcript
