@@ -38,6 +38,12 @@ from prg.pipeline.speech import (
     to_mono,
     transcript_to_word,
 )
+from prg.pipeline.speech.backends.packaged import BASE_SHA256, assemble, whisper_base_folder
+from prg.pipeline.speech.backends.whisper import (
+    RESCORE_MIN_FRAMES,
+    WhisperRecogniser,
+    rescoring_window,
+)
 
 WORDS = ("bell", "cat", "jump", "hello", "window")  # the paper's three, one easy, one held out
 LEXICON = ("bell", "cat", "jump", "hello", "window", "yellow", "belly", "house")
@@ -591,3 +597,55 @@ def test_a_wav2vec2_folder_with_pickled_weights_only_is_refused(tmp_path, wav2ve
     assert (folder / "pytorch_model.bin").is_file() and not (folder / "model.safetensors").exists()
     with pytest.raises(UsageError, match="neither a local model folder"):
         get_recogniser("wav2vec2", str(folder))
+
+
+# --------------------------------------------------------------------------------------------
+# rescoring window and the packaged whisper base
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("frames", "expected"), [(120, RESCORE_MIN_FRAMES), (701, 702), (1000, 1000), (3400, 3000)]
+)
+def test_rescoring_window_length_and_padding(frames, expected):
+    features = np.random.default_rng(frames).normal(size=(80, frames)).astype(np.float32)
+    window = rescoring_window(features)
+    assert window.shape == (80, expected)
+    kept = min(frames, expected)
+    np.testing.assert_array_equal(window[:, :kept], features[:, :kept])
+    assert np.all(window[:, kept:] == features.min())
+
+
+def test_assemble_joins_parts_and_checks_them(tmp_path):
+    import hashlib
+
+    parts = [tmp_path / "p1", tmp_path / "p2"]
+    parts[0].write_bytes(b"first part,")
+    parts[1].write_bytes(b" second part")
+    (tmp_path / "config.json").write_text("{}")
+    good = hashlib.sha256(b"first part, second part").hexdigest()
+    with pytest.raises(UsageError, match="SHA-256"):
+        assemble(parts, [tmp_path / "config.json"], tmp_path / "cache" / "m", "0" * 64)
+    assert list((tmp_path / "cache").iterdir()) == []  # nothing half-written left
+    folder = assemble(parts, [tmp_path / "config.json"], tmp_path / "cache" / "m", good)
+    assert (folder / "model.bin").read_bytes() == b"first part, second part"
+    assert (folder / "config.json").read_text() == "{}"
+    assert sorted(p.name for p in (tmp_path / "cache").iterdir()) == ["m"]
+    parts[1].unlink()  # an assembled folder is reused without its parts
+    assert assemble(parts, [], tmp_path / "cache" / "m", good) == folder
+    with pytest.raises(UsageError, match="not readable"):
+        assemble(parts, [], tmp_path / "cache" / "other", good)
+
+
+def test_packaged_whisper_base_is_assembled_and_recognises(speech, tmp_path, monkeypatch):
+    import hashlib
+
+    monkeypatch.setenv("PRG_CACHE_DIR", str(tmp_path))
+    folder = whisper_base_folder()
+    digest = hashlib.sha256((folder / "model.bin").read_bytes()).hexdigest()
+    assert digest == BASE_SHA256 and folder.parent == tmp_path
+    base = WhisperRecogniser("base")
+    assert base.whisper.model.is_multilingual and base.model == "base"
+    params = SpeechSettings(model="base", lexicon=LEXICON, rescore=True)
+    scores = base.score(load_audio(speech["hello"]), LEXICON, params)
+    assert LEXICON[int(np.nanargmax(scores))] == "hello"
