@@ -1,19 +1,30 @@
-"""Benchmark phi_S: recogniser accuracy and latency per backend on espeak-ng words.
+"""Benchmark phi_S: recogniser accuracy and latency per backend on espeak-ng words, clean and hard.
 
 Every word of ``WORDS`` (48 common English words: the paper's bell, cat and jump, short and long
-ones) is synthesised with espeak-ng in each ``--voices`` entry (default: ``en-us`` at 160 words
-per minute and the female variant ``en+f3`` at 130), and recognised with each configuration:
+ones) is synthesised with espeak-ng in two conditions:
+
+- **clean**: ``--clean`` voices (default ``en-us`` at 160 words per minute and the female variant
+  ``en+f3`` at 130), as synthesised;
+- **hard**: ``--hard`` voices that no test and no other benchmark uses, faster (default the
+  Caribbean ``en-029+m2`` at 170 wpm and New York ``en-us-nyc+f4`` at 175), with white noise
+  added at ``--snr`` dB (default 15) relative to the power of the voiced samples (those above
+  2 % of the peak), seeded per utterance.
+
+Each utterance is recognised with each configuration:
 
 - ``whisper``: faster-whisper, offline tiny.en (int8, 2 threads), free transcription — the
   reference the others are compared with;
 - ``whisper+lexicon``: the lexicon (= ``WORDS``) as hotwords, transcript snapped to the nearest
   lexicon word;
-- ``whisper+rescore``: the lexicon word of highest exact probability under Whisper's decoder;
+- ``whisper+rescore``: the lexicon word of highest exact probability under Whisper's decoder
+  (short encoder window, best-bound pruning);
+- ``whisper-base`` and ``whisper-base+rescore``: the same with whisper base (multilingual), when
+  ``--whisper-base`` (default: the model assembled by ``prg-speech-models base``) is available;
+  otherwise listed as not measured, with the reason;
 - ``pocketsphinx``: PocketSphinx 5, default US English language model;
 - ``pocketsphinx+grammar``: PocketSphinx with a JSGF grammar of the lexicon;
 - ``wav2vec2``: measured only when ``--wav2vec2-model`` (default: the cached
-  ``facebook/wav2vec2-base-960h``) loads without a download; otherwise listed as not measured,
-  with the reason.
+  ``facebook/wav2vec2-base-960h``) loads without a download; otherwise not measured.
 
 Per utterance the configurations run one after another (interleaved, so machine load affects
 them alike); each recogniser is loaded and warmed up on one utterance before timing. Latency is
@@ -21,10 +32,10 @@ the wall time of ``recognise(path, params)`` (read, resample, checks, recognitio
 ``time.perf_counter``. A word counts as correct when the written word equals it exactly; the
 letter error rate (LER) is the edit distance between written and spoken word over the spoken
 word's length (an utterance with no usable transcript counts as LER 1). Ratios: accuracy and
-median latency of each configuration over the reference's, in the same run.
+median latency of each configuration over the reference's, in the same condition of the same run.
 
-Usage: ``python benchmarks/bench_speech.py [--voices en-us:160 en+f3:130] [--limit N]``
-Prints a table and writes ``benchmarks/results/bench_speech.json``.
+Usage: ``python benchmarks/bench_speech.py [--clean en-us:160 ...] [--hard en-029+m2:170 ...]
+[--snr 15] [--limit N]``. Prints a table and writes ``benchmarks/results/bench_speech.json``.
 """
 
 from __future__ import annotations
@@ -40,6 +51,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import soundfile
 
 from prg.errors import UsageError
 from prg.files import write_json
@@ -63,14 +75,21 @@ WORDS = (
 )  # fmt: skip
 
 
-def configurations(lexicon: tuple[str, ...], wav2vec2: str | None) -> dict[str, SpeechSettings]:
+def configurations(
+    lexicon: tuple[str, ...], wav2vec2: str | None, whisper_base: str | None
+) -> dict[str, SpeechSettings]:
     configs = {
         "whisper": SpeechSettings(),
         "whisper+lexicon": SpeechSettings(lexicon=lexicon),
         "whisper+rescore": SpeechSettings(lexicon=lexicon, rescore=True),
-        "pocketsphinx": SpeechSettings(backend="pocketsphinx"),
-        "pocketsphinx+grammar": SpeechSettings(backend="pocketsphinx", lexicon=lexicon),
     }
+    if whisper_base is not None:
+        configs["whisper-base"] = SpeechSettings(model=whisper_base)
+        configs["whisper-base+rescore"] = SpeechSettings(
+            model=whisper_base, lexicon=lexicon, rescore=True
+        )
+    configs["pocketsphinx"] = SpeechSettings(backend="pocketsphinx")
+    configs["pocketsphinx+grammar"] = SpeechSettings(backend="pocketsphinx", lexicon=lexicon)
     if wav2vec2 is not None:
         configs["wav2vec2"] = SpeechSettings(backend="wav2vec2", model=wav2vec2)
         configs["wav2vec2+rescore"] = SpeechSettings(
@@ -79,17 +98,30 @@ def configurations(lexicon: tuple[str, ...], wav2vec2: str | None) -> dict[str, 
     return configs
 
 
-def synthesise(words, voices, folder: Path) -> list[tuple[str, str, Path]]:
-    """(word, voice label, WAV path) for every word in every voice."""
+def add_noise(samples: np.ndarray, snr_db: float, seed: int) -> np.ndarray:
+    """``samples`` plus white Gaussian noise ``snr_db`` below the power of the voiced samples
+    (those above 2 % of the peak: silence between words would otherwise lower the level)."""
+    voiced = samples[np.abs(samples) > 0.02 * np.abs(samples).max()]
+    noise_power = np.mean(voiced**2) / 10 ** (snr_db / 10)
+    noise = np.random.default_rng(seed).normal(0.0, np.sqrt(noise_power), len(samples))
+    return np.clip(samples + noise, -1.0, 1.0).astype(np.float32)
+
+
+def synthesise(words, voices, folder: Path, snr_db: float | None) -> list[tuple[str, str, Path]]:
+    """(word, voice label, WAV path) for every word in every voice, with noise at ``snr_db``
+    (None: clean)."""
     espeak = shutil.which("espeak-ng")
     if espeak is None:
         raise SystemExit("espeak-ng is not installed (apt-get install espeak-ng)")
     items = []
     for voice in voices:
         name, speed = voice.split(":")
-        for word in words:
-            path = folder / f"{name.replace('+', '_')}-{speed}-{word}.wav"
+        for k, word in enumerate(words):
+            path = folder / f"{name.replace('+', '_')}-{speed}-{snr_db}-{word}.wav"
             subprocess.run([espeak, "-w", str(path), "-v", name, "-s", speed, word], check=True)
+            if snr_db is not None:
+                samples, rate = soundfile.read(path, dtype="float32")
+                soundfile.write(path, add_noise(samples, snr_db, seed=k), rate)
             items.append((word, voice, path))
     return items
 
@@ -117,35 +149,56 @@ def summarise(records: list[dict]) -> dict:
     }
 
 
+def available(load, name: str, not_measured: dict[str, str]) -> bool:
+    """Whether ``load()`` succeeds; if not, its one-line reason is kept under ``name``."""
+    try:
+        load()
+    except UsageError as err:
+        not_measured[name] = str(err)
+        return False
+    return True
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--voices", nargs="+", default=["en-us:160", "en+f3:130"])
+    parser.add_argument("--clean", nargs="+", default=["en-us:160", "en+f3:130"])
+    parser.add_argument("--hard", nargs="+", default=["en-029+m2:170", "en-us-nyc+f4:175"])
+    parser.add_argument("--snr", type=float, default=15.0, help="hard condition's SNR in dB")
     parser.add_argument("--limit", type=int, default=None, help="only the first N words")
     parser.add_argument("--wav2vec2-model", default=DEFAULT_WAV2VEC2)
+    parser.add_argument("--whisper-base", default="base", help="whisper base model (folder)")
     args = parser.parse_args()
 
     words = WORDS[: args.limit] if args.limit else WORDS
     lexicon = tuple(words)
-    not_measured = {}
-    wav2vec2 = args.wav2vec2_model
-    try:
-        get_recogniser("wav2vec2", wav2vec2)
-    except UsageError as err:
-        not_measured["wav2vec2"] = str(err)
+    not_measured: dict[str, str] = {}
+    wav2vec2, base = args.wav2vec2_model, args.whisper_base
+    if not available(lambda: get_recogniser("wav2vec2", wav2vec2), "wav2vec2", not_measured):
         wav2vec2 = None
-    configs = configurations(lexicon, wav2vec2)
+    if not available(lambda: get_recogniser("whisper", base), "whisper-base", not_measured):
+        base = None
+    configs = configurations(lexicon, wav2vec2, base)
+    conditions = {
+        "clean": (args.clean, None),
+        "hard": (args.hard, args.snr),
+    }
 
     with tempfile.TemporaryDirectory() as tmp:
-        items = synthesise(words, args.voices, Path(tmp))
+        items = {
+            condition: synthesise(words, voices, Path(tmp), snr)
+            for condition, (voices, snr) in conditions.items()
+        }
         for params in configs.values():  # load and warm up every recogniser, untimed
             get_recogniser(params.backend, params.model)
-            run_once(items[0][2], params)
+            run_once(items["clean"][0][2], params)
         records: dict[str, list[dict]] = {name: [] for name in configs}
-        for k, (word, voice, path) in enumerate(items, 1):
+        every = [(c, *item) for c, its in items.items() for item in its]
+        for k, (condition, word, voice, path) in enumerate(every, 1):
             for name, params in configs.items():
                 heard, seconds = run_once(path, params)
                 records[name].append(
                     {
+                        "condition": condition,
                         "word": word,
                         "voice": voice,
                         "heard": heard,
@@ -154,40 +207,46 @@ def main() -> None:
                         "seconds": seconds,
                     }
                 )
-            if k % 12 == 0 or k == len(items):
-                print(f"{k}/{len(items)} utterances", flush=True)
+            if k % 24 == 0 or k == len(every):
+                print(f"{k}/{len(every)} utterances", flush=True)
 
     summary = {}
     for name, recs in records.items():
-        summary[name] = {"all": summarise(recs)}
-        for voice in args.voices:
-            summary[name][voice] = summarise([r for r in recs if r["voice"] == voice])
-    ref = summary[REFERENCE]["all"]
-    for name in summary:
-        s = summary[name]["all"]
-        s["accuracy_ratio"] = s["accuracy"] / ref["accuracy"] if ref["accuracy"] else None
-        s["latency_ratio"] = s["median_ms"] / ref["median_ms"]
+        summary[name] = {}
+        for condition, (voices, _) in conditions.items():
+            in_condition = [r for r in recs if r["condition"] == condition]
+            summary[name][condition] = summarise(in_condition)
+            for voice in voices:
+                summary[name][f"{condition} {voice}"] = summarise(
+                    [r for r in in_condition if r["voice"] == voice]
+                )
+    for condition in conditions:
+        ref = summary[REFERENCE][condition]
+        for name in summary:
+            s = summary[name][condition]
+            s["accuracy_ratio"] = s["accuracy"] / ref["accuracy"] if ref["accuracy"] else None
+            s["latency_ratio"] = s["median_ms"] / ref["median_ms"]
 
-    n = len(items)
     print(
-        f"\nphi_S on {len(words)} espeak-ng words x {len(args.voices)} voices "
-        f"({', '.join(args.voices)}) = {n} utterances; reference: {REFERENCE}; "
-        f"ratios = configuration / reference"
+        f"\nphi_S on {len(words)} espeak-ng words; clean: {', '.join(args.clean)}; hard: "
+        f"{', '.join(args.hard)} with white noise at {args.snr:g} dB SNR; reference: "
+        f"{REFERENCE}; ratios = configuration / reference in the same condition"
     )
-    voice_cols = " | ".join(f"acc {v}" for v in args.voices)
     print(
-        f"| configuration | accuracy | {voice_cols} | LER | acc ratio | median ms | p90 ms "
-        "| latency ratio |"
+        "| configuration | condition | accuracy | per voice | LER | acc ratio | median ms "
+        "| p90 ms | latency ratio |"
     )
-    print("|---|---:|" + "---:|" * len(args.voices) + "---:|---:|---:|---:|---:|")
+    print("|---|---|---:|---|---:|---:|---:|---:|---:|")
     for name, s in summary.items():
-        a = s["all"]
-        per_voice = " | ".join(f"{s[v]['accuracy']:.1%}" for v in args.voices)
-        ratio = "n/a" if a["accuracy_ratio"] is None else f"{a['accuracy_ratio']:.2f}"
-        print(
-            f"| {name} | {a['accuracy']:.1%} | {per_voice} | {a['ler']:.3f} | {ratio} | "
-            f"{a['median_ms']:.0f} | {a['p90_ms']:.0f} | {a['latency_ratio']:.2f} |"
-        )
+        for condition, (voices, _) in conditions.items():
+            a = s[condition]
+            per_voice = ", ".join(f"{s[f'{condition} {v}']['accuracy']:.1%}" for v in voices)
+            ratio = "n/a" if a["accuracy_ratio"] is None else f"{a['accuracy_ratio']:.2f}"
+            print(
+                f"| {name} | {condition} | {a['accuracy']:.1%} | {per_voice} | {a['ler']:.3f} "
+                f"| {ratio} | {a['median_ms']:.0f} | {a['p90_ms']:.0f} "
+                f"| {a['latency_ratio']:.2f} |"
+            )
     for name, reason in not_measured.items():
         print(f"| {name} | not measured: {reason} |")
 
@@ -199,7 +258,9 @@ def main() -> None:
             "load_avg_at_end": [round(x, 2) for x in os.getloadavg()],
         },
         "settings": {
-            "voices": args.voices,
+            "conditions": {
+                c: {"voices": voices, "snr_db": snr} for c, (voices, snr) in conditions.items()
+            },
             "words": list(words),
             "reference": REFERENCE,
             "configurations": {
