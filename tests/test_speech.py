@@ -252,6 +252,8 @@ def test_params_store_the_lexicon_as_a_tuple_without_duplicates():
         ({"backend": "pocketsphinx", "lexicon": ["bell"], "rescore": True}, "rescore is for"),
         ({"max_seconds": 0}, "max_seconds must be > 0"),
         ({"beam_size": 0}, "beam_size must be an integer >= 1"),
+        ({"prior_weight": 1.5}, "prior_weight must be between 0 and 1"),
+        ({"prior_weight": math.nan}, "prior_weight must be between 0 and 1"),
     ],
 )
 def test_bad_params_are_usage_errors(kwargs, fragment):
@@ -436,7 +438,7 @@ def test_whisper_rescoring_picks_the_spoken_word(speech, whisper, word):
     assert text == word
     assert transcript.candidates[0][0] == word
     scores = [score for _, score in transcript.candidates]
-    assert scores == sorted(scores, reverse=True) and all(s <= 0 for s in scores)
+    assert scores == sorted(scores, reverse=True)
 
 
 def test_whisper_rescoring_prunes_only_words_that_cannot_win(speech, whisper):
@@ -449,6 +451,21 @@ def test_whisper_rescoring_prunes_only_words_that_cannot_win(speech, whisper):
     assert scored.any()
     np.testing.assert_allclose(pruned[:3][scored], alone[scored], atol=1e-3)
     assert LEXICON[int(np.nanargmax(pruned))] == LEXICON[int(np.argmax(alone))] == "bell"
+
+
+def test_whisper_rescoring_prior_is_the_score_on_silence(speech, whisper):
+    """Without the prior the scores are log-probabilities; with it, each is lowered by
+    prior_weight times the word's log-probability on silence (so words the decoder expects
+    anyway lose their head start)."""
+    audio = load_audio(speech["cat"])
+    words = LEXICON[:4]
+    plain = whisper.score(audio, [words[1]], SpeechSettings(lexicon=words, prior_weight=0))
+    silence = whisper.score(
+        np.zeros(SAMPLE_RATE, np.float32), [words[1]], SpeechSettings(lexicon=words, prior_weight=0)
+    )
+    weighted = whisper.score(audio, [words[1]], SpeechSettings(lexicon=words, prior_weight=0.5))
+    assert plain[0] <= 0 and silence[0] <= 0
+    np.testing.assert_allclose(weighted, plain - 0.5 * silence, atol=1e-4)
 
 
 @pytest.mark.parametrize("variant", ["hello_44k_stereo", "hello_8k"])

@@ -31,6 +31,10 @@ class SpeechSettings:
     rescore : bool
         Choose the lexicon word the model scores highest instead of transcribing freely
         (whisper, wav2vec2); needs a lexicon.
+    prior_weight : float
+        Whisper rescoring: subtract this times each word's log-probability on silence from its
+        log-probability on the audio (0: the plain probability; 1: pointwise mutual
+        information). Takes back the decoder's preference for words it expects anyway.
     case : {"lower", "upper", "title"}
         Case of the written word.
     max_seconds : float
@@ -47,6 +51,7 @@ class SpeechSettings:
     model: str | None = None
     lexicon: tuple[str, ...] | None = None
     rescore: bool = False
+    prior_weight: float = 0.4
     case: str = "lower"
     max_seconds: float = 30.0
     min_rms_dbfs: float = -50.0
@@ -62,6 +67,8 @@ class SpeechSettings:
             object.__setattr__(self, "model", str(self.model))
         if not 0 < self.max_seconds < math.inf:
             raise UsageError(f"max_seconds must be > 0 and finite, got {self.max_seconds}")
+        if not 0 <= self.prior_weight <= 1:
+            raise UsageError(f"prior_weight must be between 0 and 1, got {self.prior_weight}")
         if not (isinstance(self.beam_size, int) and self.beam_size >= 1):
             raise UsageError(f"beam_size must be an integer >= 1, got {self.beam_size!r}")
         if self.lexicon is not None:

@@ -34,8 +34,9 @@ class Transcript:
     audio_seconds : float
         Duration of the audio.
     candidates : tuple of (str, float)
-        Rescoring only: up to 5 lexicon words with their exact log-probabilities, best first.
-        The first is the most probable lexicon word; the whisper backend prunes words that
+        Rescoring only: up to 5 lexicon words with their exact scores, best first (whisper:
+        log-probability minus ``prior_weight`` times the log-probability on silence).
+        The first is the chosen lexicon word; the whisper backend prunes words that
         provably score lower than it, so those after it are the best of the words it scored.
     """
 

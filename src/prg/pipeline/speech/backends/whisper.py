@@ -82,6 +82,7 @@ class WhisperRecogniser:
             )
         except Exception as err:
             raise not_cached(self.backend, model, "a CTranslate2 model folder", err) from None
+        self._silence: dict[tuple[tuple[str, ...], str], np.ndarray] = {}
 
     def _language(self, language: str) -> str:
         """The decoding language: ``language`` for multilingual models, else English."""
@@ -123,41 +124,71 @@ class WhisperRecogniser:
         return "".join(segment.text for segment in segments)
 
     def score(self, audio: np.ndarray, words: Sequence[str], params: SpeechSettings) -> np.ndarray:
-        """``log sum_v P(v <eot> | audio)`` over the written variants ``v`` of each word.
+        """``log P(word | audio) - prior_weight * log P(word | silence)`` for each word, where
+        ``log P(word | x) = log sum_v P(v <eot> | x)`` over the word's written variants ``v``.
+
+        The second term (pointwise mutual information when ``params.prior_weight`` is 1) takes
+        back part of the decoder's language prior: on noisy or unfamiliar speech the plain
+        probability drifts to words the decoder expects anyway ("hello", "music"). It is
+        computed once per lexicon (on one second of silence) and cached.
 
         Exact scores are computed best-bound first: a variant's probability is at most its
         first token's, so a word's score is bounded by the log-sum over its variants' distinct
-        first tokens (one decoder step for all words). Words are scored in bound order, in
-        growing batches, until the best exact score reaches the next unscored word's bound: the
-        returned best word is the exact argmax. Words left unscored get NaN.
+        first tokens (one decoder step for all words) minus its prior term. Words are scored in
+        bound order, in growing batches, until the best exact score reaches the next unscored
+        word's bound: the returned best word is the exact argmax. Words left unscored get NaN.
         """
         from scipy.special import logsumexp
 
         tok = self._tokenizer(params.language)
         start = [*tok.sot_sequence, tok.no_timestamps]
-        variants = []  # per word: its written variants' token lists
-        for word in words:
-            forms = sorted({f" {word}", f" {word[:1].upper()}{word[1:]}"})
-            variants.append([tuple(tok.encode(f + end)) for f in forms for end in ("", ".")])
-        encoded = np.asarray(self.whisper.encode(rescoring_window(self._features(audio))[None]))
+        variants = written_variants(tok, words)
+        prior = np.zeros(len(words))
+        if params.prior_weight:
+            prior = params.prior_weight * self._silence_scores(tuple(words), params.language)
+        encoded = self._encode(audio)
         first = self._forced(encoded, start, [()])[()][0]  # log P(first token)
         bounds = np.array([logsumexp([first[t] for t in {v[0] for v in vs}]) for vs in variants])
-        order = np.argsort(-bounds, kind="stable")
+        order = np.argsort(-(bounds - prior), kind="stable")
         scores = np.full(len(words), np.nan)
         done, size = 0, 2
         while done < len(order):
             batch = order[done : done + size]
-            every = {v for i in batch for v in variants[i]}
-            steps = self._forced(encoded, start, every)
-            for i in batch:
-                values = []
-                for v in variants[i]:
-                    logp = next(lp for seq, lp in steps.items() if seq[: len(v)] == v)
-                    values.append(sum(logp[k][t] for k, t in enumerate(v)) + logp[len(v)][tok.eot])
-                scores[i] = logsumexp(values)
+            exact = self._exact(encoded, start, tok.eot, [variants[i] for i in batch])
+            scores[batch] = exact - prior[batch]
             done, size = done + len(batch), min(2 * size, 8)
-            if done < len(order) and np.nanmax(scores) >= bounds[order[done]]:
+            nxt = order[done] if done < len(order) else None
+            if nxt is not None and np.nanmax(scores) >= bounds[nxt] - prior[nxt]:
                 break
+        return scores
+
+    def _silence_scores(self, words: tuple[str, ...], language: str) -> np.ndarray:
+        """``log P(word | one second of silence)`` for every word, cached per lexicon."""
+        key = (words, language)
+        if key not in self._silence:
+            tok = self._tokenizer(language)
+            start = [*tok.sot_sequence, tok.no_timestamps]
+            variants = written_variants(tok, words)
+            encoded = self._encode(np.zeros(SAMPLE_RATE, dtype=np.float32))
+            self._silence[key] = self._exact(encoded, start, tok.eot, variants)
+        return self._silence[key]
+
+    def _encode(self, audio: np.ndarray) -> np.ndarray:
+        """The encoder output for ``audio`` on the rescoring window (:func:`rescoring_window`)."""
+        return np.asarray(self.whisper.encode(rescoring_window(self._features(audio))[None]))
+
+    def _exact(self, encoded, start: list[int], eot: int, variants: list[list[tuple]]):
+        """``log sum_v P(v <eot>)`` for each word given by its variants' token tuples."""
+        from scipy.special import logsumexp
+
+        steps = self._forced(encoded, start, {v for vs in variants for v in vs})
+        scores = np.empty(len(variants))
+        for i, vs in enumerate(variants):
+            values = []
+            for v in vs:
+                logp = next(lp for seq, lp in steps.items() if seq[: len(v)] == v)
+                values.append(sum(logp[k][t] for k, t in enumerate(v)) + logp[len(v)][eot])
+            scores[i] = logsumexp(values)
         return scores
 
     def _features(self, audio: np.ndarray) -> np.ndarray:
@@ -201,6 +232,15 @@ class WhisperRecogniser:
                     raise RuntimeError("CTranslate2 returned fewer decoder steps than forced")
                 out[seq] = [_StepLogProbabilities(step) for step in logits]
         return out
+
+
+def written_variants(tok, words: Sequence[str]) -> list[list[tuple[int, ...]]]:
+    """Per word, the token tuples of its written variants: `` w``, `` W`` (capitalised), each
+    with and without a full stop."""
+    return [
+        [tuple(tok.encode(form + end)) for form in forms for end in ("", ".")]
+        for forms in (sorted({f" {w}", f" {w[:1].upper()}{w[1:]}"}) for w in words)
+    ]
 
 
 class _StepLogProbabilities:
