@@ -388,6 +388,49 @@ def test_muse_bottom_losses_do_train_the_bottom_encoders():
         assert any(p.grad.abs().sum() > 0 for p in model.encoders[m].parameters()), m
 
 
+def test_muse_mode_seeking_is_the_distance_to_the_nearest_code_of_the_same_class():
+    """The term, against a plain loop: from the label posterior's mean, each modality's top
+    decoder output is compared with every same-class sample's code and the nearest counts."""
+    model = make_model("muse", mode_seeking=1.0)
+    g = torch.Generator().manual_seed(1)
+    labels = torch.tensor([3, 3, 3, 7, 7, 9])
+    codes = {m: torch.randn(6, 16, generator=g) for m in ALL}
+    experts = {m: model.top_experts[m](codes[m]) for m in ALL}
+    terms = {}
+    total = model._mode_seeking(experts, codes, labels, terms)
+    mean = product_of_experts([experts["label"][0]], [experts["label"][1]])[0]
+    for m in ("traj", "image"):
+        decoded = model.top_decoders[m](mean)
+        nearest = [
+            min(float((decoded[i] - codes[m][j]).pow(2).sum()) for j in range(6) if labels[j] == y)
+            for i, y in enumerate(labels)
+        ]
+        assert float(terms[f"mode_{m}"]) == pytest.approx(np.mean(nearest), rel=1e-5)
+    assert float(total) == pytest.approx(10 * float(terms["mode_traj"] + terms["mode_image"]))
+    assert "mode_label" not in terms
+
+
+def test_muse_mode_seeking_trains_the_label_expert_and_top_decoders_only():
+    model = make_model("muse", mode_seeking=1.0)
+    batch = make_batch()
+    torch.manual_seed(0)
+    with_term = model.elbo(batch)
+    torch.manual_seed(0)
+    model.mode_seeking = 0.0
+    without = model.elbo(batch)
+    assert "mode_traj" not in without
+    torch.testing.assert_close(
+        with_term["loss"] - without["loss"],
+        10 * (with_term["mode_traj"] + with_term["mode_image"]),
+    )
+    with_term["mode_traj"].backward()
+    grads = lambda module: sum(  # noqa: E731
+        float(p.grad.abs().sum()) for p in module.parameters() if p.grad is not None
+    )
+    assert grads(model.top_experts["label"]) > 0 and grads(model.top_decoders["traj"]) > 0
+    assert grads(model.top_experts["traj"]) == grads(model.encoders) == 0
+
+
 def test_proper_subsets_of_three_modalities_are_three_singletons_and_three_pairs():
     assert proper_subsets(ALL) == [
         ("traj",),

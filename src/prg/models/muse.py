@@ -13,7 +13,11 @@ Loss per sample, averaged over the batch (weights by role, the paper's defaults)
 - ``+ beta KL(q(c | sg(z_all)) || N(0, I))``  top KL
 - ``+ delta * mean over proper non-empty subsets S of SKL(q(c | sg(z_S)), q(c | sg(z_all)))``
 
-The last two, the top level's regularisers, are multiplied by ``top_scale`` (1 outside training),
+- ``+ mode_seeking * sum_{m != label} gamma_m min_{j: y_j = y} ||d_m(mu(q(c | label))) - sg(z_m,j)||^2``
+  (0 in the paper; :meth:`MUSE._mode_seeking`): the label posterior's mean decodes to the
+  nearest code of its class in the batch, a real style, not the class's average code
+
+The top KL and subset SKL, the top level's regularisers, are multiplied by ``top_scale`` (1 outside training),
 which the training loop can ramp up from 0: both are minimised by experts that say nothing (an
 expert with a huge variance leaves every product unchanged), so at full weight from the first
 step, while the bottom codes still move, an expert can be driven to a variance so large that its
@@ -69,6 +73,7 @@ class MUSE(MultimodalVAE):
         gammas: dict[str, float] | None = None,
         beta: float = 1.0,
         delta: float = 1.0,
+        mode_seeking: float = 0.0,
     ):
         super().__init__(tuple(modalities), latent_dim, traj_std)
         if len(self.modalities) < 2:
@@ -81,7 +86,7 @@ class MUSE(MultimodalVAE):
         self.lambdas = weights(lambdas, lambda m: default_lambda.get(m, 1.0))
         self.alphas = weights(alphas, lambda m: 1.0)
         self.gammas = weights(gammas, lambda m: 10.0)
-        self.beta, self.delta = beta, delta
+        self.beta, self.delta, self.mode_seeking = beta, delta, mode_seeking
         self.top_scale = 1.0  # the training loop's warm-up of the top-level regularisers
         self.top_latent_dim = top_latent_dim
         self.encoders = nn.ModuleDict(
@@ -164,6 +169,10 @@ class MUSE(MultimodalVAE):
             top_rec = (self.top_decoders[m](c) - codes[m]).pow(2).sum(-1).mean()
             terms[f"top_rec_{m}"] = top_rec
             loss = loss + self.gammas[m] * top_rec
+        if self.mode_seeking and "label" in self.modalities:
+            loss = loss + self.mode_seeking * self._mode_seeking(
+                experts, codes, batch["label"], terms
+            )
         terms["top_kl"] = kl_standard_normal(q_all.mu, q_all.logvar).mean()
         loss = loss + self.beta * self.top_scale * terms["top_kl"]
         subset_posteriors = [
@@ -175,6 +184,28 @@ class MUSE(MultimodalVAE):
         terms["subset_skl"] = skl
         terms["loss"] = loss + self.delta * self.top_scale * skl
         return terms
+
+    def _mode_seeking(self, experts, codes, labels, terms) -> torch.Tensor:
+        """Winner-takes-all reconstruction from the label posterior's mean: for each sample,
+        the squared distance from d_m(mean of q(c | label)) to the nearest bottom code z_m of a
+        sample of the same class in the batch (itself included), weighted by gamma_m.
+
+        The top decoders are trained by squared error onto z_m, so from the broad label
+        posterior they regress to the class's average code, which decodes to a blend of its
+        styles. This term asks that mean to decode to one real style instead (a mode, not the
+        mean), without touching the joint posterior's reconstruction."""
+        label_mean = self._fuse({"label": experts["label"]}).mu
+        same_class = labels[:, None] == labels[None, :]
+        total = 0.0
+        for m in self.modalities:
+            if m == "label":
+                continue
+            decoded = self.top_decoders[m](label_mean)
+            distance = (decoded[:, None, :] - codes[m][None, :, :]).pow(2).sum(-1)
+            nearest = distance.masked_fill(~same_class, float("inf")).amin(1).mean()
+            terms[f"mode_{m}"] = nearest
+            total = total + self.gammas[m] * nearest
+        return total
 
     def importance_path(self, target: str, x_target: torch.Tensor, given: Inputs) -> ImportancePath:
         """Marginal log p(x_m) (``given`` empty) uses the bottom VAE of m (proposal q(z_m | x_m),
