@@ -220,6 +220,7 @@ RANGES: dict[str, Range] = {
     "model.module.model.alpha": non_negative(WEIGHT_MAX),
     "model.module.model.beta": non_negative(WEIGHT_MAX),
     "model.module.model.delta": non_negative(WEIGHT_MAX),
+    "model.module.model.mode_seeking": non_negative(WEIGHT_MAX),
     "model.module.model.kl_weight": non_negative(WEIGHT_MAX),
     "model.module.model.lambdas.*": non_negative(WEIGHT_MAX),
     "model.module.model.alphas.*": non_negative(WEIGHT_MAX),
@@ -265,6 +266,7 @@ RANGES: dict[str, Range] = {
     "speech.max_seconds": positive(600),
     "speech.min_rms_dbfs": Range(-200, 0),
     "speech.beam_size": count(1, 64),
+    "speech.prior_weight": Range(0, 1),
     # prg-dictaphone
     "speed": Range(10, 1000),  # espeak-ng words per minute
     # prg-simulate
