@@ -12,17 +12,18 @@ Loss per sample, averaged over the batch (weights by role, the paper's defaults)
 - ``+ sum_m gamma_m ||d_m(c) - sg(z_m)||^2``  top reconstruction of the (detached) bottom codes
 - ``+ beta KL(q(c | sg(z_all)) || N(0, I))``  top KL
 - ``+ delta * mean over proper non-empty subsets S of SKL(q(c | sg(z_S)), q(c | sg(z_all)))``
+- ``+ mode_seeking * sum_{m != label} gamma_m min_{j: y_j = y} ||d_m(mu_label) - sg(z_m,j)||^2``
+  with ``mu_label`` the mean of q(c | label) (0 in the paper; :meth:`MUSE._mode_seeking`): the
+  label posterior's mean decodes to the nearest code of its class in the batch, a real style,
+  not the class's average code
 
-- ``+ mode_seeking * sum_{m != label} gamma_m min_{j: y_j = y} ||d_m(mu(q(c | label))) - sg(z_m,j)||^2``
-  (0 in the paper; :meth:`MUSE._mode_seeking`): the label posterior's mean decodes to the
-  nearest code of its class in the batch, a real style, not the class's average code
-
-The top KL and subset SKL, the top level's regularisers, are multiplied by ``top_scale`` (1 outside training),
-which the training loop can ramp up from 0: both are minimised by experts that say nothing (an
-expert with a huge variance leaves every product unchanged), so at full weight from the first
-step, while the bottom codes still move, an expert can be driven to a variance so large that its
-gradients vanish and it never recovers (measured: the label expert's log-variance at 27 after
-350 steps at learning rate 3e-3). The reference code warms up beta the same way.
+The top KL and subset SKL, the top level's regularisers, are multiplied by ``top_scale`` (1
+outside training), which the training loop can ramp up from 0: both are minimised by experts
+that say nothing (an expert with a huge variance leaves every product unchanged), so at full
+weight from the first step, while the bottom codes still move, an expert can be driven to a
+variance so large that its gradients vanish and it never recovers (measured: the label expert's
+log-variance at 27 after 350 steps at learning rate 3e-3). The reference code warms up beta
+the same way.
 
 The top level never sends gradients into the bottom VAEs; every subset is computed on every batch.
 Cross-modal generation: each available x_m -> bottom posterior mean -> h_m -> product with the

