@@ -680,7 +680,10 @@ def test_the_not_ready_page_points_at_the_pilot_copy_beside_it(
     page.click("#pilot-copy")
     assert page.url == (pilot / "index.html").as_uri()
     assert "PILOT" in page.text_content("#pilot-banner")
-    assert page.is_visible("#consent-agree")  # it runs
+    # it runs: the page's script shows the consent step once loaded (wait for it: under a full
+    # parallel test run, an immediate check raced the script)
+    page.wait_for_selector("#consent-agree", state="visible", timeout=10_000)
+    assert page.is_visible("#consent-agree")
 
 
 def test_some_human_samples_missing_is_an_error_on_request(tmp_path, samples, capsys):
