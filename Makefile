@@ -3,7 +3,7 @@ SHELL := /bin/bash
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
-EXTRAS ?= dev,sweep,speech,speech-base,browser
+EXTRAS ?= dev,sweep,speech,speech-base,browser,lasa
 # Debian packages: espeak-ng speaks the test and demo words, sox converts their audio, chromium
 # runs the study pages in the browser tests (Playwright drives it; no `playwright install`)
 SYSTEM_PACKAGES ?= espeak-ng sox chromium
@@ -88,6 +88,7 @@ bench: setup ## Run the benchmarks (tables printed, JSON under benchmarks/result
 	$(BIN)/python benchmarks/bench_train.py
 	$(BIN)/python benchmarks/bench_evaluate.py
 	$(BIN)/python benchmarks/bench_dmp.py
+	$(BIN)/python benchmarks/bench_lasa.py
 	$(BIN)/python benchmarks/bench_write.py --speech
 	$(BIN)/python benchmarks/bench_speech.py
 	$(BIN)/python benchmarks/bench_simulate.py

@@ -201,6 +201,39 @@ def _dmp(d: dict) -> list[Row]:
     return rows
 
 
+def _lasa(d: dict) -> list[Row]:
+    speed = f"<= {1 / d['settings']['target_ratio']:.2g}"
+    rows = []
+    for r in d["rows"]:
+        rows.append(
+            Row(
+                f"DMP on LASA, {r['demos']} human demonstrations, {r['basis']} bases: "
+                "fit + rollout (median)",
+                f"{r['ours_ms']:.1f} ms",
+                "movement-primitives",
+                f"{r['theirs_ms']:.1f} ms",
+                r["ours_ms"] / r["theirs_ms"],
+                speed,
+            )
+        )
+        for kind in ("median", "worst"):
+            rows.append(
+                Row(
+                    f"DMP on LASA, {r['basis']} bases: RMSE {kind} (at rest: "
+                    f"{r[f'rest_rmse_{kind}_mm']:.3g} mm)",
+                    f"{r[f'ours_rmse_{kind}_mm']:.3g} mm",
+                    "movement-primitives",
+                    f"{r[f'theirs_rmse_{kind}_mm']:.3g} mm",
+                    r[f"ours_rmse_{kind}_mm"] / r[f"theirs_rmse_{kind}_mm"],
+                    f"<= 1 on every demonstration ({r['demos'] - len(r['ours_worse_than_theirs'])}"
+                    f" of {r['demos']})"
+                    if kind == "worst"
+                    else "",
+                )
+            )
+    return rows
+
+
 def _write_word(d: dict) -> list[Row]:
     target_ms = d["settings"]["target_ms_6_letters"]
     rows = [
@@ -322,6 +355,7 @@ BENCHMARKS: dict[str, Callable[[dict], list[Row]]] = {
     "bench_train": _train,
     "bench_evaluate": _evaluate,
     "bench_dmp": _dmp,
+    "bench_lasa": _lasa,
     "bench_write": _write_word,
     "bench_speech": _speech,
     "bench_simulate": _simulate,

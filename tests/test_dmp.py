@@ -22,6 +22,7 @@ from prg.pipeline.dmp import (
     fit_dmp,
     forcing_targets,
     rollout,
+    uniform_in_time,
 )
 
 
@@ -49,13 +50,15 @@ def rmse(a: np.ndarray, b: np.ndarray) -> float:
 def rk4_reference(dmp: DMP, n_samples: int, y0=None, goal=None, tau=None, substeps: int = 10):
     """Per-step RK4 integration of the DMP's ODE, written from the formulation, not the code.
 
-    ``y' = v / tau``, ``v' = (K (g - y) - D v - K (g - y0) x + K f(x)) / tau`` with ``x = exp(
-    -alpha_x t / tau)`` and ``f = design_matrix(x) @ weights``, from ``(y0, 0)``, ``substeps``
-    RK4 steps between output samples.
+    ``y' = v / tau``, ``v' = (K (g_m - y) + D (tau g' - v) - K (g - y0) x + K f(x)) / tau`` with
+    the moving goal ``g_m = g - g' (tau - t)``, ``x = exp(-alpha_x t / tau)`` and ``f =
+    design_matrix(x) @ weights``, from ``(y0, tau y0')``, ``substeps`` RK4 steps between output
+    samples (``y0'``, ``g'``: the DMP's start and goal velocities).
     """
     y0 = dmp.y0 if y0 is None else np.asarray(y0, float)
     goal = dmp.goal if goal is None else np.asarray(goal, float)
     tau = dmp.tau if tau is None else tau
+    goal_v = dmp.goal_velocity
     k_, d_ = dmp.stiffness, dmp.damping
     steps = (n_samples - 1) * substeps
     h = tau / steps
@@ -64,9 +67,15 @@ def rk4_reference(dmp: DMP, n_samples: int, y0=None, goal=None, tau=None, subste
     f_half = design_matrix(x_half, dmp.centres, dmp.widths) @ dmp.weights
 
     def acceleration(j: int, y: np.ndarray, v: np.ndarray) -> np.ndarray:
-        return (k_ * (goal - y) - d_ * v - k_ * (goal - y0) * x_half[j] + k_ * f_half[j]) / tau
+        moving_goal = goal - goal_v * (tau - half_times[j])
+        return (
+            k_ * (moving_goal - y)
+            + d_ * (tau * goal_v - v)
+            - k_ * (goal - y0) * x_half[j]
+            + k_ * f_half[j]
+        ) / tau
 
-    y, v = y0.copy(), np.zeros_like(y0)
+    y, v = y0.copy(), tau * dmp.start_velocity
     out = [y.copy()]
     for i in range(steps):
         j = 2 * i
@@ -622,3 +631,123 @@ def test_bad_basis_and_damping_values_are_named():
         basis_functions(5, alpha_x=0.0)
     with pytest.raises(ValueError, match="damping: expected a finite number"):
         fit_dmp(word_like(50, loops=1), damping=np.nan)
+
+
+# ----------------------------------------------------------------------------- moving ends
+
+
+def moving_curve(n: int = 1000, tau: float = 2.0) -> np.ndarray:
+    """A loopy 2-D curve (cm) that is already moving at its first sample and still at its last:
+    constant drift plus loops, uniform in time over ``tau``."""
+    t = np.linspace(0.0, tau, n)
+    angle = 2 * np.pi * 3 * t / tau
+    return np.column_stack([4.0 * t + 0.6 * np.sin(angle), 1.0 - np.cos(angle) + 0.5 * t])
+
+
+def test_demonstrated_velocities_reproduce_a_path_that_starts_and_ends_moving():
+    tau = 2.0
+    path = moving_curve(tau=tau)
+    step = tau / (len(path) - 1)
+    at_rest = rollout(fit_dmp(path, tau=tau, n_basis=100))
+    moving = fit_dmp(path, tau=tau, n_basis=100, velocities="demonstrated")
+    out = rollout(moving)
+    # the analytic first and last velocities of moving_curve: 4 + 0.6 * 6 pi / tau, 0.5
+    assert_allclose(moving.start_velocity, [4.0 + 0.6 * 3 * np.pi, 0.5], rtol=1e-6)
+    assert_allclose(moving.goal_velocity, [4.0 + 0.6 * 3 * np.pi, 0.5], rtol=1e-6)
+    assert rmse(out, path) < 1e-3  # cm
+    assert rmse(at_rest, path) > 50 * rmse(out, path)  # the start transient of a DMP at rest
+    # the rollout leaves its first and last samples at the demonstrated velocities, not at rest
+    # (one-sided second-order differences)
+    end = (3 * out[-1] - 4 * out[-2] + out[-3]) / (2 * step)
+    start = (-3 * out[0] + 4 * out[1] - out[2]) / (2 * step)
+    assert_allclose(end, moving.goal_velocity, rtol=5e-3)
+    assert_allclose(start, moving.start_velocity, rtol=5e-3)
+
+
+def test_rollout_with_start_and_goal_velocities_matches_a_per_step_integration():
+    dmp = fit_dmp(moving_curve(600), tau=1.5, n_basis=60, velocities="demonstrated")
+    assert np.all(dmp.start_velocity != 0) and np.all(dmp.goal_velocity != 0)
+    assert_allclose(rollout(dmp, 600), rk4_reference(dmp, 600, substeps=4), rtol=0, atol=1e-5)
+
+
+def test_a_start_velocity_alone_gives_the_critically_damped_free_response():
+    """Zero weights, goal at the start: only the start velocity moves the DMP, and the response
+    of a critically damped spring to it is ``y0 + v0 t exp(-omega t)``, ``omega = sqrt(K) /
+    tau``."""
+    template = fit_dmp(np.zeros((50, 2)), tau=0.8, n_basis=10)
+    v0 = np.array([3.0, -1.5])
+    out = rollout(dataclasses_replace(template, weights=np.zeros((10, 2))), 401, start_velocity=v0)
+    t = np.linspace(0.0, 0.8, 401)[:, None]
+    omega = math.sqrt(template.stiffness) / 0.8
+    assert_allclose(out, v0 * t * np.exp(-omega * t), rtol=0, atol=1e-9)
+
+
+def dataclasses_replace(dmp: DMP, **changes) -> DMP:
+    return DMP.from_dict(
+        {**dmp.to_dict(), **{k: np.asarray(v).tolist() for k, v in changes.items()}}
+    )
+
+
+def test_rest_is_the_default_and_keeps_both_ends_at_rest(word):
+    dmp = fit_dmp(moving_curve(), tau=2.0, n_basis=80)
+    assert_array_equal(dmp.start_velocity, 0)
+    assert_array_equal(dmp.goal_velocity, 0)
+    out = rollout(dmp, 2001)
+    step = 2.0 / 2000
+    # starts at rest, unlike the path (9.7 cm/s): the first step only accelerates
+    assert np.linalg.norm(out[1] - out[0]) / step < 0.01 * (4.0 + 0.6 * 3 * np.pi)
+    # fitted at rest or with velocities, a word that starts and ends at rest is reproduced alike
+    at_rest = rollout(fit_dmp(word, tau=3.0))
+    demonstrated = rollout(fit_dmp(word, tau=3.0, velocities="demonstrated"))
+    assert rmse(at_rest, demonstrated) < 1e-4
+
+
+def test_velocities_round_trip_and_older_documents_load_at_rest():
+    dmp = fit_dmp(moving_curve(300), tau=1.0, n_basis=40, velocities="demonstrated")
+    restored = DMP.from_dict(json.loads(json.dumps(dmp.to_dict())))
+    assert_array_equal(restored.start_velocity, dmp.start_velocity)
+    assert_array_equal(rollout(restored), rollout(dmp))
+    older = {k: v for k, v in dmp.to_dict().items() if k not in ("start_velocity", "goal_velocity")}
+    assert_array_equal(DMP.from_dict(older).goal_velocity, [0.0, 0.0])
+    with pytest.raises(UsageError, match=r"start_velocity: expected shape \(2,\)"):
+        DMP.from_dict({**dmp.to_dict(), "start_velocity": [1.0]})
+
+
+def test_bad_velocities_name_the_argument_and_what_is_accepted():
+    with pytest.raises(UsageError, match="velocities: expected one of rest, demonstrated"):
+        fit_dmp(moving_curve(100), velocities="measured")
+    dmp = fit_dmp(moving_curve(100), n_basis=20)
+    with pytest.raises(UsageError, match="goal_velocity: expected finite values"):
+        rollout(dmp, goal_velocity=[np.nan, 0.0])
+
+
+# ----------------------------------------------------------------------------- irregular times
+
+
+def test_uniform_in_time_resamples_an_irregular_demonstration_for_the_fit():
+    rng = np.random.default_rng(3)
+    times = np.sort(rng.uniform(0.0, 2.0, 400))
+    times = np.concatenate([[0.0], times, [2.0]])
+    times[50] = times[49]  # two events in the same millisecond
+
+    def path(t):
+        return np.column_stack([4.0 * t + 0.6 * np.sin(3 * np.pi * t), 1.0 - np.cos(3 * np.pi * t)])
+
+    uniform, duration = uniform_in_time(path(times), times, n_samples=500)
+    assert duration == 2.0 and uniform.shape == (500, 2)
+    assert rmse(uniform, path(np.linspace(0.0, 2.0, 500))) < 1e-3
+    out = rollout(fit_dmp(uniform, tau=duration, n_basis=100, velocities="demonstrated"))
+    assert rmse(out, path(np.linspace(0.0, 2.0, 500))) < 2e-3
+
+
+@pytest.mark.parametrize(
+    ("times", "message"),
+    [
+        ([0.0, 2.0, 1.0, 3.0], "times: expected non-decreasing values"),
+        ([0.0, 0.0, 1.0, 1.0], "times: expected at least 3 distinct times"),
+        ([0.0, 1.0, 2.0], r"times: expected shape \(4,\) like points"),
+    ],
+)
+def test_uniform_in_time_refuses_times_it_cannot_resample(times, message):
+    with pytest.raises(UsageError, match=message):
+        uniform_in_time(np.zeros((4, 2)), times)

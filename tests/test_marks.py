@@ -209,3 +209,14 @@ def test_the_study_stimulus_shows_the_marks(dataset_letters):
     marks = [word.segment_points(k) for k, kind in enumerate(word.segment_kinds) if kind == "mark"]
     for stroke, mark in zip(strokes[1:], marks):
         np.testing.assert_array_equal(stroke, mark)
+
+
+def test_a_words_dmp_starts_and_ends_at_rest(dataset_letters):
+    """The word pipeline keeps the rest-to-rest DMP (prg.pipeline.dmp: ``velocities="rest"``):
+    the pen is still at the first and last samples of the rollout."""
+    letters = [dataset_letters[c][0] for c in "joy"]
+    word, rollout = compose_word(np.stack(letters), "joy")
+    assert not word.dmp.start_velocity.any() and not word.dmp.goal_velocity.any()
+    step = word.dmp.tau / (len(rollout) - 1)
+    speeds = np.linalg.norm(np.diff(rollout, axis=0), axis=1) / step
+    assert speeds[0] < 0.01 * np.median(speeds) and speeds[-1] < 0.01 * np.median(speeds)

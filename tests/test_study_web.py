@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 from urllib.parse import parse_qs, urlparse
 
+import numpy as np
 import pytest
 
 from studies.analysis.schema import STUDY1_COLUMNS, STUDY2_COLUMNS
@@ -320,6 +321,60 @@ def capture(page, folder: Path, writer: str, restart_on: int | None = None) -> d
             page.click("#next")
     assert download.value.suggested_filename.startswith(f"capture_{writer}_")
     return json.loads(Path(download.value.path()).read_text())
+
+
+def test_captured_human_strokes_fit_a_dmp_that_starts_and_ends_moving(page, tmp_path, samples):
+    """A writer's words from the capture page, at their recorded times, go through the DMP fit
+    of human demonstrations (prg.pipeline.dmp: ``uniform_in_time``, then ``fit_dmp(...,
+    velocities="demonstrated")``): the rollout reproduces each stroke, including its first
+    movement, which a DMP fitted at rest misses."""
+    from prg.pipeline.dmp import fit_dmp, rollout, uniform_in_time
+
+    folder = build(
+        tmp_path / "b",
+        "turing",
+        "words=[cat, dog]",
+        "attention_checks=[]",
+        "delayed_strokes=false",
+        robot=samples["robot"],
+    )
+    page.goto((folder / "capture" / "index.html").as_uri() + "?writer=w7")
+    page.click("#begin")
+    box = page.locator("#pad").bounding_box()
+    scale = box["width"] / page.evaluate("PRGCapture.config.canvas_width")
+    with page.expect_download() as download:
+        for k in range(2):
+            # a pen already moving when it touches down: fast straight into the loops, at about
+            # 100 Hz (a real writer's tablet rate), one event per 10 ms
+            stroke = [(40 + 6 * i, 150) for i in range(6)] + loops(60)[2:]
+            (x, y), *rest = stroke
+            page.mouse.move(box["x"] + x * scale, box["y"] + y * scale)
+            page.mouse.down()
+            for x, y in rest:
+                page.wait_for_timeout(10)
+                page.mouse.move(box["x"] + x * scale, box["y"] + y * scale + k)
+            page.mouse.up()
+            page.click("#next")
+    doc = json.loads(Path(download.value.path()).read_text())
+    for sample in doc["samples"]:
+        (stroke,) = sample["strokes"]
+        raw = np.array([p[:2] for p in stroke])
+        seconds = np.array([p[2] for p in stroke]) / 1000.0
+        uniform, duration = uniform_in_time(raw, seconds, n_samples=4 * len(raw))
+        size = np.ptp(uniform, axis=0).max()
+        errors = {}
+        for velocities in ("rest", "demonstrated"):
+            dmp = fit_dmp(
+                # one basis function per pen sample: a mouse path turns at every sample
+                uniform,
+                tau=duration,
+                n_basis=len(raw),
+                velocities=velocities,
+            )
+            errors[velocities] = np.linalg.norm(rollout(dmp) - uniform, axis=1)
+        first = slice(0, len(uniform) // 20)  # the first movement, the straight entry
+        assert errors["demonstrated"][first].max() < 0.5 * errors["rest"][first].max()
+        assert np.sqrt(np.mean(errors["demonstrated"] ** 2)) < 0.01 * size, sample["word"]
 
 
 def test_capture_json_round_trips_into_a_runnable_study(page, tmp_path, samples):

@@ -113,7 +113,7 @@ def compose_word(
         word.points[: word.body_end], params.speed_cm_s, params.ramp_s, params.samples_per_s
     )
     n_basis = basis_count(len(samples), per_100_points=params.basis_per_100_samples)
-    dmp = fit_dmp(samples, tau=duration, n_basis=n_basis)
+    dmp = fit_dmp(samples, tau=duration, n_basis=n_basis, velocities="rest")  # a pen at rest
     word.dmp = dmp
     word.duration_s = duration + sum(
         stroke_duration(path, params.speed_cm_s) for _, path in word.delayed_strokes()

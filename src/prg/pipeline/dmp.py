@@ -8,8 +8,19 @@ pulled towards the goal ``g``, plus a learned forcing term that fades out with a
 **Formulation** (per dimension, ``v = tau y'``)::
 
     tau x' = -alpha_x x,                       x(0) = 1   =>  x(t) = exp(-alpha_x t / tau)
-    tau v' = K (g - y) - D v - K (g - y0) x + K f(x),     y(0) = y0,  v(0) = 0
+    tau v' = K (g_m(t) - y) + D (tau g' - v) - K (g - y0) x + K f(x),  y(0) = y0, v(0) = tau y0'
+    g_m(t) = g - g' (tau - t)                  (the goal, moving at the goal velocity g')
     f(x)   = x * sum_i psi_i(x) w_i / sum_i psi_i(x),     psi_i(x) = exp(-h_i (x - c_i)^2)
+
+With the start velocity ``y0'`` and the goal velocity ``g'`` both zero (the default, and what the
+word pipeline uses: a pen starts and stops at rest) this is the rest-to-rest DMP below. A
+demonstration that is already moving at its first sample, or still moving at its last (a person's
+pen, the LASA shapes), is followed from its demonstrated start velocity (the initial state, as in
+Ijspeert et al. 2013 and ``movement_primitives``' ``start_yd``) towards a goal that moves at its
+demonstrated final velocity and arrives at ``g`` at ``t = tau`` (the moving-goal form of Kober,
+Mülling, Krömer, Lampert, Schölkopf, Peters 2010, "Movement templates for learning of hitting and
+batting", ICRA, and Mülling, Kober, Kroemer, Peters 2013, IJRR 32(3)): ``fit_dmp(...,
+velocities="demonstrated")``.
 
 This is the modification of Hoffmann, Pastor, Park, Schaal (2009, ICRA, "Biologically-inspired
 dynamical systems for movement generation") and Pastor, Hoffmann, Asfour, Schaal (2009, ICRA,
@@ -32,8 +43,9 @@ reuses the previous spacing), so every Gaussian covers about the same span of ti
 
 **Fitting** (:func:`fit_dmp`): the demonstration is taken on a uniform time grid over ``[0, tau]``
 (``n`` points); velocities and accelerations come from five-point (fourth-order) finite differences
-(one-sided near the ends). The target forcing values ``F = (tau^2 y'' + D tau y') / K - (g - y) +
-(g - y0) x`` (``y0`` the first point, ``g`` the last) are regressed on the design matrix
+(one-sided near the ends). The target forcing values ``F = (tau^2 y'' + D tau y') / K - (g_m(t) -
+y) + (g - y0) x - D tau g' / K`` (``y0`` the first point, ``g`` the last, ``g'`` zero or the last
+point's velocity) are regressed on the design matrix
 ``Phi[k, i] = x_k psi_i(x_k) / sum_j psi_j(x_k)`` with **one** ridge solve for all basis functions
 and all dimensions::
 
@@ -41,8 +53,10 @@ and all dimensions::
       = solve(Phi^T Phi / n + regularisation I, Phi^T F / n)     (banded Cholesky; lstsq if 0)
 
 **Rollout** (:func:`rollout`): the phase has a closed form, so the input ``u(t) = (g - y0)(1 - x) +
-f(x)`` is a known function of time and ``e = y - y0`` obeys the linear time-invariant ODE ``tau^2
-e'' + D tau e' + K e = K u``, started at rest. It is discretised exactly for an input that is the
+f(x) - g' (tau - t) + D tau g' / K`` is a known function of time and ``e = y - y0`` obeys the
+linear time-invariant ODE ``tau^2 e'' + D tau e' + K e = K u``, started at ``e'(0) = y0'``: the
+response to the input from rest plus the free response to that start velocity (the same
+recurrence, one extra term in its first step). It is discretised exactly for an input that is the
 cubic through the four nearest samples (one matrix exponential), and the resulting two-pole
 recurrence is solved as one banded lower-triangular system (LAPACK ``tbtrs``, forward
 substitution, the same arithmetic as an all-pole ``lfilter``; ``scipy.signal`` itself costs a
@@ -61,11 +75,13 @@ Accuracy (``tests/test_dmp.py``): with the defaults a 1000-point word-like curve
 of about 1e-4 mm; the fourth-order differences and the cubic hold matter (second-order differences
 with a linear hold leave about 0.06 mm).
 
-The DMP starts at rest (``v(0) = 0``), as a pen does, so demonstrations should start at rest. One
-that starts at speed ``v0`` is followed with the transient error ``-v0 t exp(-omega t)``, ``omega
-= sqrt(K) / tau``, largest (``v0 tau / (e sqrt(K))``) at ``t = tau / sqrt(K)`` and below 5 % of
-that from ``t = tau / 2`` on: 0.6 cm for a straight 20 cm stroke at constant speed, 1.4 cm for a
-loopy 20 cm word (100 cm of path) at constant speed.
+Fitted at rest (the default), the DMP starts at rest (``v(0) = 0``), as a pen does. A
+demonstration that starts at speed ``v0`` is then followed with the transient error ``-v0 t
+exp(-omega t)``, ``omega = sqrt(K) / tau``, largest (``v0 tau / (e sqrt(K))``) at ``t = tau /
+sqrt(K)`` and below 5 % of that from ``t = tau / 2`` on: 0.6 cm for a straight 20 cm stroke at
+constant speed, 1.4 cm for a loopy 20 cm word (100 cm of path) at constant speed. Such a
+demonstration is fitted with ``velocities="demonstrated"``, which removes that transient exactly
+(measured on the LASA set: ``benchmarks/bench_lasa.py``).
 """
 
 from __future__ import annotations
@@ -93,6 +109,7 @@ __all__ = [
     "REGULARISATION",
     "SAMPLES_PER_BASIS",
     "STIFFNESS",
+    "VELOCITIES",
     "WIDTH_FACTOR",
     "basis_count",
     "basis_functions",
@@ -101,6 +118,7 @@ __all__ = [
     "forcing_targets",
     "phase",
     "rollout",
+    "uniform_in_time",
 ]
 
 STIFFNESS = 156.25
@@ -111,6 +129,8 @@ ALPHA_X = math.log(100.0)
 """Default canonical-system constant: the phase falls to 0.01 at ``t = tau``."""
 WIDTH_FACTOR = 1.0
 """Standard deviation of each Gaussian in units of the spacing between neighbouring centres."""
+VELOCITIES = ("rest", "demonstrated")
+"""What :func:`fit_dmp` takes for the start and goal velocities (``velocities=``)."""
 REGULARISATION = 1e-12
 """Default ridge parameter of :func:`fit_dmp` (on the per-sample mean squared error)."""
 BASIS_PER_100_POINTS = 20.0
@@ -182,6 +202,11 @@ class DMP:
         Basis-function widths ``h_i > 0`` in phase.
     n_samples : int
         Number of points of the demonstration: the default number of rollout samples.
+    start_velocity : ndarray, shape (dims,)
+        Velocity ``y0'`` at ``t = 0`` (per second; zeros: starts at rest).
+    goal_velocity : ndarray, shape (dims,)
+        Velocity ``g'`` of the moving goal, and so of the rollout at ``t = tau`` (per second;
+        zeros: ends at rest).
     """
 
     weights: _FloatArray
@@ -194,9 +219,14 @@ class DMP:
     centres: _FloatArray
     widths: _FloatArray
     n_samples: int
+    start_velocity: _FloatArray | None = None
+    goal_velocity: _FloatArray | None = None
 
     def __post_init__(self) -> None:
-        for name in ("weights", "y0", "goal", "centres", "widths"):
+        for name in ("start_velocity", "goal_velocity"):
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, np.zeros(np.shape(self.y0)))
+        for name in ("weights", "y0", "goal", "centres", "widths", *_VELOCITIES):
             arr = np.array(getattr(self, name), dtype=np.float64)
             arr.setflags(write=False)
             object.__setattr__(self, name, arr)
@@ -225,12 +255,16 @@ class DMP:
             "centres": self.centres.tolist(),
             "widths": self.widths.tolist(),
             "n_samples": int(self.n_samples),
+            "start_velocity": self.start_velocity.tolist(),
+            "goal_velocity": self.goal_velocity.tolist(),
         }
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> DMP:
-        """The DMP stored by :meth:`to_dict`, validated (shapes agree, values finite, in range)."""
-        missing = sorted(_FIELDS - set(data))
+        """The DMP stored by :meth:`to_dict`, validated (shapes agree, values finite, in range).
+
+        The two velocities may be absent (a DMP stored before they existed): zeros, at rest."""
+        missing = sorted(_FIELDS - set(_VELOCITIES) - set(data))
         if missing:
             raise UsageError(f"DMP data: missing keys {missing}")
         weights = _finite(data["weights"], "weights", ndim=2)
@@ -258,9 +292,15 @@ class DMP:
             centres=centres,
             widths=widths,
             n_samples=_count(data["n_samples"], "n_samples", minimum=2),
+            **{
+                name: _vector(data[name], name, dims)
+                for name in _VELOCITIES
+                if data.get(name) is not None
+            },
         )
 
 
+_VELOCITIES = ("start_velocity", "goal_velocity")
 _FIELDS = frozenset(field.name for field in dataclasses.fields(DMP))
 
 
@@ -542,6 +582,7 @@ def forcing_targets(
     stiffness: float = STIFFNESS,
     damping: float = DAMPING,
     alpha_x: float = ALPHA_X,
+    velocities: str = "rest",
 ) -> tuple[_FloatArray, _FloatArray]:
     """Phase and target forcing values of a demonstration on a uniform grid over ``[0, tau]``.
 
@@ -553,27 +594,44 @@ def forcing_targets(
         Its duration, > 0.
     stiffness, damping, alpha_x : float
         ``K > 0``, ``D >= 0`` and ``alpha_x > 0`` of the DMP.
+    velocities : {"rest", "demonstrated"}
+        The goal velocity ``g'``: zero, or the demonstration's last velocity (:func:`fit_dmp`).
 
     Returns
     -------
     x : ndarray, shape (n,)
         Phase at the samples.
     targets : ndarray, shape (n, dims)
-        ``(tau^2 y'' + D tau y') / K - (g - y) + (g - y0) x``, with ``y'`` and ``y''`` from
-        five-point finite differences of the positions (centred, one-sided at the ends).
+        ``(tau^2 y'' + D tau y') / K - (g_m(t) - y) + (g - y0) x - D tau g' / K``, with ``y'``
+        and ``y''`` from five-point finite differences of the positions (centred, one-sided at
+        the ends).
     """
     y = _points(points)
     tau = _positive(tau, "tau")
     stiffness = _positive(stiffness, "stiffness")
     damping = _nonnegative(damping, "damping")
     alpha_x = _positive(alpha_x, "alpha_x")
-    return _targets(y, tau, stiffness, damping, alpha_x)
+    x, targets, _, _ = _targets(y, tau, stiffness, damping, alpha_x, _velocities(velocities))
+    return x, targets
+
+
+def _velocities(value: Any) -> bool:
+    """Whether ``velocities`` asks for the demonstrated ones (else at rest)."""
+    if value not in VELOCITIES:
+        raise UsageError(f"velocities: expected one of {', '.join(VELOCITIES)}, got {value!r}")
+    return value == "demonstrated"
 
 
 def _targets(
-    y: _FloatArray, tau: float, stiffness: float, damping: float, alpha_x: float
-) -> tuple[_FloatArray, _FloatArray]:
-    """:func:`forcing_targets` on validated arguments.
+    y: _FloatArray,
+    tau: float,
+    stiffness: float,
+    damping: float,
+    alpha_x: float,
+    demonstrated: bool,
+) -> tuple[_FloatArray, _FloatArray, _FloatArray, _FloatArray]:
+    """:func:`forcing_targets` on validated arguments, and the start and goal velocities (per
+    second: the demonstration's first and last when ``demonstrated``, else zeros).
 
     Computed on ``y - y0``: the targets depend on the positions only through differences, and
     finite differences of absolute coordinates would round at the size of the coordinates, which
@@ -585,13 +643,68 @@ def _targets(
     rel = y - y[0]
     yd = _derivative(rel, dt, 1)
     ydd = _derivative(rel, dt, 2)
-    x = phase(np.arange(n) * dt, tau, alpha_x)
+    t = np.arange(n) * dt
+    x = phase(t, tau, alpha_x)
     goal = rel[-1]
+    start_velocity = yd[0] if demonstrated else np.zeros_like(goal)
+    goal_velocity = yd[-1] if demonstrated else np.zeros_like(goal)
     targets = (tau**2 * ydd + damping * tau * yd) / stiffness - (goal - rel) + np.outer(x, goal)
-    return x, targets
+    if demonstrated:  # the moving goal g_m(t) = g - g' (tau - t) and the damping of tau g'
+        targets += np.outer(tau - t, goal_velocity) - damping * tau * goal_velocity / stiffness
+    return x, targets, start_velocity, goal_velocity
 
 
 # ----------------------------------------------------------------------------- fit and rollout
+
+
+def uniform_in_time(
+    points: ArrayLike, times: ArrayLike, n_samples: int | None = None
+) -> tuple[_FloatArray, float]:
+    """A demonstration sampled at irregular ``times`` (a pen on a tablet or a browser canvas),
+    resampled uniformly in time for :func:`fit_dmp`.
+
+    Samples that share a time are averaged into one (a browser can deliver two pointer events in
+    the same millisecond), then a cubic spline through the rest (``scipy.interpolate``,
+    not-a-knot ends, which leave the end velocities free) is evaluated at ``n_samples`` points
+    evenly spaced from the first time to the last. The spline keeps the velocities and
+    accelerations that the forcing targets are made of; linear interpolation would put a corner
+    at every original sample.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, dims)
+        Positions, finite.
+    times : array_like, shape (n,)
+        Their times, finite and non-decreasing, spanning more than zero.
+    n_samples : int, optional
+        Number of uniform samples, >= 3; default ``n``.
+
+    Returns
+    -------
+    uniform : ndarray, shape (n_samples, dims)
+        The positions at the uniform times; the first and last equal the first and last
+        (time-averaged) samples.
+    duration : float
+        ``times[-1] - times[0]``: the ``tau`` to fit them with.
+    """
+    from scipy.interpolate import CubicSpline  # only here: scipy.interpolate costs an import
+
+    y = _points(points)
+    t = _finite(times, "times", ndim=1)
+    if t.shape != (y.shape[0],):
+        raise UsageError(f"times: expected shape ({y.shape[0]},) like points, got {t.shape}")
+    if np.any(np.diff(t) < 0):
+        raise UsageError("times: expected non-decreasing values")
+    n = y.shape[0] if n_samples is None else _count(n_samples, "n_samples", minimum=3)
+    unique, first = np.unique(t, return_index=True)
+    if unique.size < 3:
+        raise UsageError(f"times: expected at least 3 distinct times, got {unique.size}")
+    counts = np.diff(np.append(first, t.size))
+    merged = np.add.reduceat(y, first, axis=0) / counts[:, None]
+    grid = np.linspace(unique[0], unique[-1], n)
+    uniform = CubicSpline(unique, merged)(grid)
+    uniform[0], uniform[-1] = merged[0], merged[-1]
+    return uniform, float(unique[-1] - unique[0])
 
 
 def fit_dmp(
@@ -604,6 +717,7 @@ def fit_dmp(
     damping: float | None = None,
     alpha_x: float = ALPHA_X,
     width_factor: float = WIDTH_FACTOR,
+    velocities: str = "rest",
 ) -> DMP:
     """Fit a DMP to one demonstration with a single ridge-regression solve.
 
@@ -627,11 +741,16 @@ def fit_dmp(
         Canonical-system constant, > 0.
     width_factor : float
         Basis width in units of the centre spacing, > 0 (:func:`basis_functions`).
+    velocities : {"rest", "demonstrated"}
+        ``"rest"``: the DMP starts and ends at rest, whatever the demonstration does (a word's
+        pen; the default). ``"demonstrated"``: it starts with the demonstration's first
+        velocity and ends with its last (finite differences, as for the forcing targets), for
+        demonstrations that are already moving at either end (module docstring).
 
     Returns
     -------
     DMP
-        With ``y0 = points[0]``, ``goal = points[-1]``, ``n_samples = n``.
+        With ``y0 = points[0]``, ``goal = points[-1]``, ``n_samples = n`` and the two velocities.
 
     Raises
     ------
@@ -646,9 +765,12 @@ def fit_dmp(
     stiffness = _positive(stiffness, "stiffness")
     damping = 2.0 * math.sqrt(stiffness) if damping is None else _nonnegative(damping, "damping")
     alpha_x = _positive(alpha_x, "alpha_x")
+    demonstrated = _velocities(velocities)
     centres, widths = basis_functions(n_basis, alpha_x, width_factor)
 
-    x, targets = _targets(y, tau, stiffness, damping, alpha_x)
+    x, targets, start_velocity, goal_velocity = _targets(
+        y, tau, stiffness, damping, alpha_x, demonstrated
+    )
     start, values = _design_band(x, centres, widths)
     with _one_blas_thread():
         weights = _ridge(start, values, targets, regularisation, n_basis)
@@ -663,6 +785,8 @@ def fit_dmp(
         centres=centres,
         widths=widths,
         n_samples=n,
+        start_velocity=start_velocity,
+        goal_velocity=goal_velocity,
     )
 
 
@@ -763,8 +887,11 @@ def _hold(
     return block[:2, :2], np.array(gains)
 
 
-def _response(u: _FloatArray, stiffness: float, damping: float) -> _FloatArray:
-    """``e`` at the samples of ``u`` (n, dims), uniform over ``t / tau`` in [0, 1], from rest."""
+def _response(
+    u: _FloatArray, stiffness: float, damping: float, start_slope: _FloatArray
+) -> _FloatArray:
+    """``e`` at the samples of ``u`` (n, dims), uniform over ``s = t / tau`` in [0, 1], from
+    ``e(0) = 0`` and ``de/ds(0) = start_slope`` (dims,)."""
     n = u.shape[0]
     points = min(_HOLD_POINTS, n)
     transition, gains = _hold(stiffness, damping, 1.0 / (n - 1), points)
@@ -776,6 +903,9 @@ def _response(u: _FloatArray, stiffness: float, damping: float) -> _FloatArray:
     combined = np.zeros_like(u)
     combined[1:] = drive[:, 0]
     combined[2:] += transition[0, 1] * drive[:-1, 1] - transition[1, 1] * drive[:-1, 0]
+    # the free response to the start slope, (transition^k (0, slope))[0], obeys the same
+    # recurrence with this single term (its z-transform's numerator is transition[0, 1] z)
+    combined[1] += transition[0, 1] * start_slope
     # e[k] - trace e[k-1] + det e[k-2] = combined[k], from rest: unit lower-triangular, 2 sub-diagonals
     bands = np.empty((3, n))
     bands[0] = 1.0
@@ -795,6 +925,8 @@ def rollout(
     tau: float | None = None,
     *,
     dt: float | None = None,
+    start_velocity: ArrayLike | None = None,
+    goal_velocity: ArrayLike | None = None,
 ) -> _FloatArray:
     """Positions of the DMP over ``[0, tau]``, computed without a per-step Python loop.
 
@@ -815,6 +947,8 @@ def rollout(
     dt : float, optional
         Time step instead of ``n_samples``, > 0: ``round(tau / dt) + 1`` samples (at least 2), so
         the step is ``dt`` up to the rounding of ``tau / dt``.
+    start_velocity, goal_velocity : array_like, shape (dims,), optional
+        New start velocity ``y0'`` and goal velocity ``g'`` (per second); default the DMP's.
 
     Returns
     -------
@@ -827,6 +961,16 @@ def rollout(
     start = dmp.y0 if y0 is None else _vector(y0, "y0", dims)
     end = dmp.goal if goal is None else _vector(goal, "goal", dims)
     tau = dmp.tau if tau is None else _positive(tau, "tau")
+    start_vel = (
+        dmp.start_velocity
+        if start_velocity is None
+        else _vector(start_velocity, "start_velocity", dims)
+    )
+    goal_vel = (
+        dmp.goal_velocity
+        if goal_velocity is None
+        else _vector(goal_velocity, "goal_velocity", dims)
+    )
     if dt is not None:
         if n_samples is not None:
             raise UsageError("n_samples, dt: give one of them, not both")
@@ -839,5 +983,7 @@ def rollout(
     with _one_blas_thread():
         u = _forcing(x, dmp.centres, dmp.widths, dmp.weights)
         u += np.outer(1.0 - x, end - start)
-        e = _response(u, dmp.stiffness, dmp.damping)
+        if goal_vel.any():  # the moving goal (module docstring)
+            u += np.outer(s - 1.0, tau * goal_vel) + dmp.damping * tau * goal_vel / dmp.stiffness
+        e = _response(u, dmp.stiffness, dmp.damping, tau * start_vel)
     return e[::every] + start
