@@ -687,7 +687,7 @@ def demo_markdown(demo: Path = DEMO) -> str:
         "",
         f"**Table II** (`prg-dictaphone`, MUSE): the words from speech (whisper, lexicon, "
         f"rescoring) and from the letter images alone (images read right: "
-        f"{dictaphone['image_read_accuracy']:.0%}):",
+        f"{dictaphone['image_read_accuracy']:.0%}{_folded_reading(dictaphone)}):",
         "",
         table2,
         "",
@@ -704,6 +704,16 @@ def demo_markdown(demo: Path = DEMO) -> str:
         f"margin {study['margin']}: {study['verdict']} ({study['primary']}).",
     ]
     return "\n".join(lines)
+
+
+def _folded_reading(dictaphone: dict) -> str:
+    """``, up to shape twins (i/l ...): N%`` where the snapshot has it (older ones do not)."""
+    folded = dictaphone.get("image_read_accuracy_folded")
+    if folded is None:
+        return ""
+    return (
+        f"; up to shape twins such as a dotless i and an l, as coherence folds them: {folded:.0%}"
+    )
 
 
 def _minutes(seconds: float) -> str:

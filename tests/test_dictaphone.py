@@ -96,3 +96,18 @@ def test_bad_input_is_refused_in_one_line_and_writes_nothing(
         dictaphone(cfg)
     assert expected in str(refused.value) and "\n" not in str(refused.value)
     assert not out.exists()
+
+
+def test_image_reading_is_scored_exact_and_up_to_shape_twins(table):
+    from prg.evaluation.dictaphone import same_shapes
+
+    assert same_shapes("beii", "bell") and same_shapes("cat", "cat")
+    assert same_shapes("C0t", "cot") and not same_shapes("cat", "cot")
+    assert not same_shapes("bel", "bell") and not same_shapes("be!l", "bell")
+    metrics = json.loads((table / "metrics.json").read_text())
+    images = [r for r in metrics["rows"] if r["channel"] == "image"]
+    for row in images:
+        assert row["correct_folded"] == same_shapes(row["perceived"], row["word"])
+        assert row["correct_folded"] or not row["correct"]
+    folded = np.mean([r["correct_folded"] for r in images])
+    assert metrics["image_read_accuracy_folded"] == pytest.approx(folded, abs=1e-3)

@@ -93,6 +93,7 @@ def dictaphone(cfg: DictConfig) -> dict[str, Any]:
                 "rows": rows,
                 "sound_accuracy": accuracy(rows, "sound"),
                 "image_read_accuracy": accuracy(rows, "image"),
+                "image_read_accuracy_folded": accuracy(rows, "image", folded=True),
             }
             write_json(staging / "metrics.json", metrics)
         log.info("Table II written to %s", out_dir)
@@ -119,7 +120,10 @@ def _log_run(run, cfg: DictConfig, metrics: dict, out_dir: Path) -> None:
         }
     )
     run.log_metrics(
-        {key: metrics[key] for key in ("sound_accuracy", "image_read_accuracy")},
+        {
+            key: metrics[key]
+            for key in ("sound_accuracy", "image_read_accuracy", "image_read_accuracy_folded")
+        },
         prefix="dictaphone/",
     )
     run.log_metrics(

@@ -116,6 +116,7 @@ def dictaphone_table(
                     "channel": channel,
                     "perceived": perceived,
                     "correct": perceived == word,
+                    "correct_folded": same_shapes(perceived, word),
                     "written": result.text,
                     "seconds": round(seconds, 3),
                     "dmp_rmse_mm": round(dmp_rmse_mm(result), 4),
@@ -135,9 +136,26 @@ def dictaphone_table(
     return rows, items
 
 
-def accuracy(rows: list[dict], channel: str) -> float | None:
-    """The share of ``channel``'s rows whose word was perceived right (None without rows)."""
-    chosen = [r["correct"] for r in rows if r["channel"] == channel]
+def same_shapes(perceived: str, word: str) -> bool:
+    """Whether ``perceived`` is ``word`` up to shape twins, letter by letter (``beii`` for
+    ``bell``: a single-stroke l and a dotless i are the same vertical bar;
+    :data:`~prg.evaluation.classifiers.SHAPE_TWINS`, the convention of the folded coherence)."""
+    from prg.evaluation.classifiers import FOLD
+
+    if len(perceived) != len(word):
+        return False
+    try:
+        pairs = [(char_to_label(a), char_to_label(b)) for a, b in zip(perceived, word)]
+    except UsageError:  # a character the alphabet lacks is no letter of the word
+        return False
+    return all(FOLD[a] == FOLD[b] for a, b in pairs)
+
+
+def accuracy(rows: list[dict], channel: str, folded: bool = False) -> float | None:
+    """The share of ``channel``'s rows whose word was perceived right (None without rows);
+    ``folded``: up to shape twins (:func:`same_shapes`)."""
+    key = "correct_folded" if folded else "correct"
+    chosen = [r[key] for r in rows if r["channel"] == channel]
     return round(float(np.mean(chosen)), 3) if chosen else None
 
 
