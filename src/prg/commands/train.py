@@ -228,6 +228,9 @@ def _train(cfg: DictConfig) -> TrainResult:
     metrics["steps"] = float(trainer.global_step)
     best = best_checkpoint(trainer)
     last = next((str(c.path) for c in callbacks if isinstance(c, LastCheckpoint)), "")
+    if trainer.fast_dev_run:  # Lightning swapped the loggers out: no run was started, none made
+        log.info("fast dev run (debug=fdr): no MLflow run, no checkpoints")
+        return TrainResult(module, trainer, metrics, None, best, last)
     if cfg.get("export_dir") and best and trainer.is_global_zero:  # DDP: rank 0 only
         _export(Path(cfg.export_dir), best, metrics, logger.run_id, cfg)
     if trainer.is_global_zero:

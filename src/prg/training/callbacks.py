@@ -69,6 +69,8 @@ class LastCheckpoint(Checkpoint):
         self._saved_step = -1
 
     def save(self, trainer: L.Trainer) -> None:
+        if trainer.fast_dev_run:  # a smoke test of the loop, nothing to resume (as ModelCheckpoint)
+            return
         if trainer.is_global_zero:
             with atomic_path(self.path) as tmp:
                 # every rank calls it; the strategy writes on rank 0
