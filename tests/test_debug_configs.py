@@ -77,3 +77,29 @@ def test_profiler_writes_its_report_from_the_command_line(tmp_path, small_datase
     (report,) = (tmp_path / "logs" / "profiler").glob("*profiler-debug-cvae-seed0.txt")
     text = report.read_text()
     assert "run_training_batch" in text and "Total" in text
+
+
+def test_training_runs_log_system_metrics_by_default(tmp_path, small_dataset):
+    """MLflow's system-metrics monitor on the training run (conf/callbacks: system_metrics)."""
+    _, result = _train(
+        tmp_path,
+        small_dataset,
+        "model=cvae",
+        "trainer.max_epochs=15",  # a few seconds: several samples of the monitor
+        "callbacks.figures=null",
+        "callbacks.system_metrics.sampling_interval_s=0.2",
+    )
+    client = MlflowClient(sqlite_uri(tmp_path / "mlruns.db"))
+    metrics = client.get_run(result.run_id).data.metrics
+    assert {"system/cpu_utilization_percentage", "system/system_memory_usage_megabytes"} <= set(
+        metrics
+    ), sorted(metrics)
+    assert 0 < metrics["system/system_memory_usage_megabytes"]
+
+
+def test_system_metrics_can_be_turned_off(tmp_path, small_dataset):
+    _, result = _train(
+        tmp_path, small_dataset, "model=cvae", "debug=limit", "callbacks.system_metrics=null"
+    )
+    metrics = MlflowClient(sqlite_uri(tmp_path / "mlruns.db")).get_run(result.run_id).data.metrics
+    assert not [k for k in metrics if k.startswith("system/")]

@@ -305,3 +305,17 @@ def test_a_model_whose_modalities_the_data_lack_is_refused_in_one_line():
         "model avae_ti needs modalities ['traj', 'image'] but the data provides ['traj', "
         "'label'] (data.loader.modalities): ['image'] missing"
     )
+
+
+def test_the_run_logs_its_dataset_with_the_manifests_digest(tmp_path, small_dataset):
+    import hashlib
+
+    result = train(_cfg(tmp_path, small_dataset, "model=cvae", "trainer.max_epochs=1"))
+    run = _client(tmp_path).get_run(result.run_id)
+    (used,) = run.inputs.dataset_inputs
+    manifest = small_dataset / "prepared" / "synthetic" / "manifest.json"
+    sha = hashlib.sha256(manifest.read_bytes()).hexdigest()
+    assert used.dataset.name == "synthetic" and used.dataset.digest == sha[:36]
+    assert run.data.tags["prg.data.manifest_sha256"] == sha
+    assert str(manifest.parent.resolve()) in used.dataset.source
+    assert [(t.key, t.value) for t in used.tags] == [("mlflow.data.context", "training")]

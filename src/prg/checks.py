@@ -248,6 +248,7 @@ RANGES: dict[str, Range] = {
     "callbacks.early_stopping.patience": count(0),
     "callbacks.early_stopping.min_delta": non_negative(),  # a loss difference: any finite size
     "callbacks.early_stopping.start_fraction": PROBABILITY,
+    "callbacks.system_metrics.sampling_interval_s": positive(),
     "quick_epochs.*": count(1),
     "converged_epochs.*": count(1),
     # prg-evaluate

@@ -214,6 +214,11 @@ def _train(cfg: DictConfig) -> TrainResult:
             config_yaml=OmegaConf.to_yaml(cfg, resolve=True),
             params=flatten(OmegaConf.to_container(cfg, resolve=True)),
             register_as=f"prg-{cfg.model.name}" if cfg.get("register_model") else None,
+            dataset={
+                "name": cfg.data.name,
+                "digest": manifest_hash[:36],  # MLflow keeps at most 36 characters of a digest
+                "source": str(Path(cfg.paths.data_dir, "prepared", cfg.data.name).resolve()),
+            },
         )
     )
     trainer: L.Trainer = _build(cfg.trainer, "trainer", logger=logger, callbacks=callbacks)

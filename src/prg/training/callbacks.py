@@ -110,6 +110,67 @@ class LastCheckpoint(Checkpoint):
             pl_module._counts = dict(state["counts"])
 
 
+class SystemMetrics(L.Callback):
+    """CPU, memory, disk and network use (and GPU, where one is monitored) of the training run,
+    logged by MLflow's own system-metrics monitor as ``system/*`` metrics of the run, every
+    ``sampling_interval_s`` seconds from the start of training to its end.
+
+    MLflow starts this monitor itself only for runs opened with ``mlflow.start_run(
+    log_system_metrics=True)``; Lightning's logger opens its run through the client, so the
+    monitor is attached here to that run. It needs ``psutil`` (installed with MLflow here); without
+    it the callback does nothing. A resumed run continues its steps (``resume_logging``). Off:
+    ``callbacks.system_metrics=null``.
+    """
+
+    def __init__(self, sampling_interval_s: float = 10.0):
+        if not sampling_interval_s > 0:
+            raise ValueError(f"sampling_interval_s must be > 0, got {sampling_interval_s!r}")
+        self.sampling_interval_s = sampling_interval_s
+        self._monitor = None
+
+    def on_train_start(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
+        logger = _mlflow(trainer)
+        if logger is None or trainer.global_rank != 0:
+            return
+        try:
+            import psutil  # noqa: F401  (the monitor's dependency)
+            from mlflow.system_metrics.system_metrics_monitor import SystemMetricsMonitor
+        except ImportError:
+            log.debug("psutil is not installed: no system metrics")
+            return
+        self._monitor = SystemMetricsMonitor(
+            logger.run_id,
+            sampling_interval=self.sampling_interval_s,
+            resume_logging=trainer.global_step > 0,
+            tracking_uri=logger._tracking_uri,
+        )
+        self._monitor.start()
+
+    def _finish(self) -> None:
+        if self._monitor is not None:
+            self._monitor.finish()
+            self._monitor = None
+
+    def on_train_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
+        self._finish()
+
+    def on_exception(self, trainer: L.Trainer, pl_module: L.LightningModule, exc) -> None:
+        self._finish()
+
+
+def _log_dataset(client, run_id: str, name: str, digest: str, source: str) -> None:
+    """The prepared dataset as the run's training input (MLflow's dataset lineage: the run page's
+    *Datasets used*, ``search_runs`` by dataset): a :class:`~mlflow.data.meta_dataset.MetaDataset`,
+    as the data are not loaded as one table, whose digest is the manifest's SHA-256."""
+    from mlflow.data.meta_dataset import MetaDataset
+    from mlflow.data.sources import LocalArtifactDatasetSource
+    from mlflow.entities import DatasetInput, InputTag
+
+    dataset = MetaDataset(LocalArtifactDatasetSource(source), name=name, digest=digest)
+    context = InputTag(key="mlflow.data.context", value="training")
+    client.log_inputs(run_id, datasets=[DatasetInput(dataset._to_mlflow_entity(), [context])])
+
+
 class MLflowRun(L.Callback):
     """Bookkeeping of the MLflow run: the composed config (artifact and flattened params) at the
     start, the run id inside every checkpoint (so resuming continues the same run), the best
@@ -120,10 +181,12 @@ class MLflowRun(L.Callback):
         config_yaml: str = "",
         params: dict[str, Any] | None = None,
         register_as: str | None = None,
+        dataset: dict[str, str] | None = None,
     ):
         self.config_yaml = config_yaml
         self.params = params or {}
         self.register_as = register_as
+        self.dataset = dataset  # name, digest, source: logged as the run's training input
 
     def on_train_start(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
         # on_train_start, not on_fit_start: a resumed trainer's global_step is restored by now
@@ -145,6 +208,8 @@ class MLflowRun(L.Callback):
         if changed:  # MLflow params are immutable: keep the first values, note what changed
             client.set_tag(run_id, f"prg.resumed_at_step_{trainer.global_step}", ", ".join(changed))
         logger.log_hyperparams({k: v for k, v in params.items() if k not in logged})
+        if self.dataset and not resumed:
+            _log_dataset(client, run_id, **self.dataset)
 
     def on_save_checkpoint(self, trainer, pl_module, checkpoint: dict[str, Any]) -> None:
         logger = _mlflow(trainer)
