@@ -198,7 +198,12 @@ def test_paper_profile_registers_the_best_checkpoint(tmp_path, small_dataset):
     client = _client(tmp_path)
     versions = client.search_model_versions("name='prg-cvae'")
     assert len(versions) == 1 and versions[0].run_id == result.run_id
-    assert versions[0].source.endswith("checkpoints/best.ckpt")
+    run = client.get_run(result.run_id)
+    assert versions[0].source == run.data.tags["prg.model_uri"]  # the servable MLflow model
+    assert float(versions[0].tags["metric.val_loss"]) == pytest.approx(
+        run.data.metrics["val/loss"], rel=1e-5
+    )
+    assert client.get_model_version_by_alias("prg-cvae", "champion").version == versions[0].version
     assert client.get_run(result.run_id).data.tags["prg.experiment"] == "paper"
 
 

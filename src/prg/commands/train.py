@@ -214,6 +214,7 @@ def _train(cfg: DictConfig) -> TrainResult:
             config_yaml=OmegaConf.to_yaml(cfg, resolve=True),
             params=flatten(OmegaConf.to_container(cfg, resolve=True)),
             register_as=f"prg-{cfg.model.name}" if cfg.get("register_model") else None,
+            log_model=bool(cfg.get("log_model", True)),
             dataset={
                 "name": cfg.data.name,
                 "digest": manifest_hash[:36],  # MLflow keeps at most 36 characters of a digest

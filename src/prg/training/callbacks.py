@@ -3,7 +3,6 @@ every few steps, a validation metric shared by every family, generation figures.
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import math
 import os
@@ -19,6 +18,7 @@ from lightning.pytorch.loggers import MLFlowLogger
 from prg.files import atomic_path
 from prg.models.modalities import MODALITIES, TRAJ
 from prg.plotting import pyplot
+from prg.serving import log_writer_model
 
 log = logging.getLogger(__name__)
 
@@ -172,9 +172,10 @@ def _log_dataset(client, run_id: str, name: str, digest: str, source: str) -> No
 
 
 class MLflowRun(L.Callback):
-    """Bookkeeping of the MLflow run: the composed config (artifact and flattened params) at the
-    start, the run id inside every checkpoint (so resuming continues the same run), the best
-    checkpoint at the end, and optionally a registered model version."""
+    """Bookkeeping of the MLflow run: the composed config (artifact and flattened params) and the
+    dataset at the start, the run id inside every checkpoint (so resuming continues the same run),
+    the best checkpoint at the end as an artifact and as an MLflow model (``log_model``:
+    :func:`prg.serving.log_writer_model`), and optionally a registered version of that model."""
 
     def __init__(
         self,
@@ -182,10 +183,12 @@ class MLflowRun(L.Callback):
         params: dict[str, Any] | None = None,
         register_as: str | None = None,
         dataset: dict[str, str] | None = None,
+        log_model: bool = True,
     ):
         self.config_yaml = config_yaml
         self.params = params or {}
         self.register_as = register_as
+        self.log_model = log_model  # the best checkpoint as an MLflow model (prg.serving)
         self.dataset = dataset  # name, digest, source: logged as the run's training input
 
     def on_train_start(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
@@ -223,17 +226,19 @@ class MLflowRun(L.Callback):
         if logger is None or trainer.global_rank != 0 or not best or not Path(best).is_file():
             return
         logger.experiment.log_artifact(logger.run_id, best, "checkpoints")
-        if self.register_as:
-            from mlflow import MlflowClient
-            from mlflow.exceptions import MlflowException
+        if not self.log_model:
+            return
+        from prg.serving import register_version
 
-            client = MlflowClient(logger._tracking_uri)
-            with contextlib.suppress(MlflowException):  # already registered: add a version
-                client.create_registered_model(self.register_as)
-            run = client.get_run(logger.run_id)
-            source = f"{run.info.artifact_uri}/checkpoints/{Path(best).name}"
-            version = client.create_model_version(self.register_as, source, logger.run_id)
-            log.info("registered %s version %s", self.register_as, version.version)
+        model_uri = log_writer_model(best, logger.run_id, logger._tracking_uri)
+        log.info("logged the MLflow model %s (prg.serving.WriterModel)", model_uri)
+        if self.register_as:
+            # named as in the export's metrics.json (val/loss -> val_loss)
+            metrics = {k.replace("/", "_"): float(v) for k, v in trainer.callback_metrics.items()}
+            version = register_version(
+                self.register_as, logger.run_id, logger._tracking_uri, metrics
+            )
+            log.info("registered %s version %s", self.register_as, version)
 
 
 class StepMeans(L.Callback):

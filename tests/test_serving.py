@@ -1,0 +1,191 @@
+"""Trained models as MLflow models (prg.serving): logged by every training run, loaded with
+``mlflow.pyfunc.load_model``, registered with metrics and a champion alias, and served over HTTP by
+the real ``mlflow models serve`` on loopback."""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import subprocess
+import sys
+import time
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from mlflow import MlflowClient
+
+from prg.commands.cli import compose_config
+from prg.commands.train import train
+from prg.serving import CHAMPION, main
+from prg.tracking import sqlite_uri
+from prg.writer import Writer
+
+BIN = Path(sys.executable).parent
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory, small_dataset):
+    """A MUSE trained for a few steps, exported, its best checkpoint logged as an MLflow model."""
+    root = tmp_path_factory.mktemp("serving")
+    cfg = compose_config(
+        "train",
+        [
+            "model=muse",
+            f"paths.root_dir={root}",
+            f"paths.data_dir={small_dataset}",
+            f"export_dir={root / 'models' / 'muse'}",
+            "trainer.max_epochs=1",
+            "trainer.limit_train_batches=3",
+            "trainer.limit_val_batches=2",
+            "trainer.enable_progress_bar=false",
+            "callbacks.figures=null",
+        ],
+    )
+    result = train(cfg)
+    uri = sqlite_uri(root / "mlruns.db")
+    return {"root": root, "uri": uri, "run_id": result.run_id, "ckpt": result.best_checkpoint}
+
+
+def library_rollout(ckpt: str, **write) -> np.ndarray:
+    return Writer.from_checkpoint(ckpt).write(**write).rollout
+
+
+def test_every_training_run_logs_a_servable_model(trained):
+    import mlflow
+
+    run = MlflowClient(trained["uri"]).get_run(trained["run_id"])
+    model_uri = run.data.tags["prg.model_uri"]
+    mlflow.set_tracking_uri(trained["uri"])
+    model = mlflow.pyfunc.load_model(model_uri)
+    inputs = [c.name for c in model.metadata.signature.inputs.inputs]
+    assert inputs == ["text", "trajectories"]
+    out = model.predict(pd.DataFrame({"text": ["cat", "ox"]}))
+    assert list(out["text"]) == ["cat", "ox"]
+    for text, rollout in zip(out["text"], out["rollout"]):
+        expected = library_rollout(trained["ckpt"], text=text)
+        assert np.allclose(np.array(json.loads(rollout)), expected, atol=1e-5)
+    word = json.loads(out["word"][0])
+    assert word["schema"] == "prg.word_trajectory" and word["dmp"]["n_basis"] > 0
+    assert out["duration_s"][0] == pytest.approx(word["duration_s"])
+
+
+def test_a_row_of_letter_trajectories_alone_is_read_and_written(trained):
+    import mlflow
+
+    mlflow.set_tracking_uri(trained["uri"])
+    tags = MlflowClient(trained["uri"]).get_run(trained["run_id"]).data.tags
+    model = mlflow.pyfunc.load_model(tags["prg.model_uri"])
+    t = np.linspace(0, 2 * np.pi, 60)
+    strokes = [np.column_stack([np.cos(t), np.sin(t)]).tolist(), [[0, 0], [0, 1], [0, 2]]]
+    out = model.predict(pd.DataFrame({"trajectories": [json.dumps(strokes)]}))
+    expected = library_rollout(trained["ckpt"], trajectories=[np.array(s) for s in strokes])
+    assert len(out["text"][0]) == 2
+    assert np.allclose(np.array(json.loads(out["rollout"][0])), expected, atol=1e-5)
+    with pytest.raises(Exception, match="give a text, trajectories or both"):
+        model.predict(pd.DataFrame({"text": [None], "trajectories": [None]}))
+
+
+def test_register_tags_metrics_and_moves_the_champion_alias(trained, tmp_path):
+    export = trained["root"] / "models" / "muse"
+    evaluation = tmp_path / "metrics.json"
+    client = MlflowClient(trained["uri"])
+    versions = []
+    for coherence in (0.81, 0.93, 0.88):  # three evaluations of the same model
+        evaluation.write_text(json.dumps({"muse/coherence_folded_T_given_S": coherence}))
+        assert (
+            main(
+                [
+                    "register",
+                    str(export),
+                    "--evaluation",
+                    str(evaluation),
+                    "--tracking-uri",
+                    trained["uri"],
+                ]
+            )
+            == 0
+        )
+        versions.append(client.get_latest_versions("prg-muse")[0].version)
+    champion = client.get_model_version_by_alias("prg-muse", CHAMPION)
+    assert champion.version == versions[1]  # the best coherence, not the newest
+    assert champion.tags["metric.coherence_folded_T_given_S"] == "0.93"
+    assert float(champion.tags["metric.val_loss"]) == pytest.approx(
+        json.loads((export / "metrics.json").read_text())["val_loss"], rel=1e-5
+    )
+    assert champion.run_id == trained["run_id"]
+
+
+def test_register_refuses_a_folder_that_is_no_export_in_one_line(tmp_path, capsys):
+    (tmp_path / "metrics.json").write_text("{}")
+    assert (
+        main(["register", str(tmp_path), "--tracking-uri", "sqlite:///" + str(tmp_path / "x.db")])
+        == 2
+    )
+    (line,) = capsys.readouterr().out.strip().splitlines()
+    assert "expected the family and mlflow_run_id of a prg-train export" in line
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_a_registered_version_is_served_over_http(trained, tmp_path):
+    export = trained["root"] / "models" / "muse"
+    assert (
+        main(["register", str(export), "--name", "prg-muse-http", "--tracking-uri", trained["uri"]])
+        == 0
+    )
+    port = _free_port()
+    env = {**os.environ, "MLFLOW_TRACKING_URI": trained["uri"]}
+    server = subprocess.Popen(
+        [
+            str(BIN / "mlflow"),
+            "models",
+            "serve",
+            "-m",
+            f"models:/prg-muse-http@{CHAMPION}",
+            "--env-manager",
+            "local",
+            "-h",
+            "127.0.0.1",
+            "-p",
+            str(port),
+        ],
+        env=env,
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
+    try:
+        base = f"http://127.0.0.1:{port}"
+        deadline = time.monotonic() + 180
+        while True:
+            try:
+                with urllib.request.urlopen(f"{base}/ping", timeout=2) as reply:
+                    if reply.status == 200:
+                        break
+            except (urllib.error.URLError, ConnectionError, TimeoutError):
+                pass
+            assert server.poll() is None, server.stdout.read()[-3000:]
+            assert time.monotonic() < deadline, "the model server did not start in 180 s"
+            time.sleep(0.5)
+        body = json.dumps({"dataframe_records": [{"text": "cat"}]}).encode()
+        request = urllib.request.Request(
+            f"{base}/invocations", data=body, headers={"Content-Type": "application/json"}
+        )
+        with urllib.request.urlopen(request, timeout=120) as reply:
+            (prediction,) = json.loads(reply.read())["predictions"]
+    finally:
+        server.terminate()
+        server.wait(timeout=30)
+    assert prediction["text"] == "cat"
+    expected = library_rollout(trained["ckpt"], text="cat")
+    assert np.allclose(np.array(json.loads(prediction["rollout"])), expected, atol=1e-5)
