@@ -90,34 +90,55 @@ def test_a_row_of_letter_trajectories_alone_is_read_and_written(trained):
         model.predict(pd.DataFrame({"text": [None], "trajectories": [None]}))
 
 
-def test_register_tags_metrics_and_moves_the_champion_alias(trained, tmp_path):
-    export = trained["root"] / "models" / "muse"
-    evaluation = tmp_path / "metrics.json"
+def _train_muse(root: Path, data_dir: Path, seed: int):
+    cfg = compose_config(
+        "train",
+        [
+            "model=muse",
+            f"seed={seed}",
+            f"paths.root_dir={root}",
+            f"paths.data_dir={data_dir}",
+            f"export_dir={root / 'models' / f'muse-{seed}'}",
+            "trainer.max_epochs=1",
+            "trainer.limit_train_batches=3",
+            "trainer.limit_val_batches=2",
+            "trainer.enable_progress_bar=false",
+            "callbacks.figures=null",
+        ],
+    )
+    return train(cfg)
+
+
+def test_register_tags_metrics_and_moves_the_champion_alias(trained, tmp_path, small_dataset):
+    second = _train_muse(trained["root"], small_dataset, seed=1)  # another run, same store
+    exports = {
+        trained["run_id"]: trained["root"] / "models" / "muse",
+        second.run_id: trained["root"] / "models" / "muse-1",
+    }
     client = MlflowClient(trained["uri"])
-    versions = []
-    for coherence in (0.81, 0.93, 0.88):  # three evaluations of the same model
+
+    def register(run_id: str, coherence: float) -> str:
+        evaluation = tmp_path / f"{run_id}.json"
         evaluation.write_text(json.dumps({"muse/coherence_folded_T_given_S": coherence}))
-        assert (
-            main(
-                [
-                    "register",
-                    str(export),
-                    "--evaluation",
-                    str(evaluation),
-                    "--tracking-uri",
-                    trained["uri"],
-                ]
-            )
-            == 0
-        )
-        versions.append(client.get_latest_versions("prg-muse")[0].version)
-    champion = client.get_model_version_by_alias("prg-muse", CHAMPION)
-    assert champion.version == versions[1]  # the best coherence, not the newest
+        args = ["register", str(exports[run_id]), "--evaluation", str(evaluation)]
+        assert main([*args, "--name", "prg-muse-reg", "--tracking-uri", trained["uri"]]) == 0
+        (version,) = [
+            v for v in client.search_model_versions("name = 'prg-muse-reg'") if v.run_id == run_id
+        ]
+        return version.version
+
+    first = register(trained["run_id"], 0.81)
+    better = register(second.run_id, 0.93)
+    champion = client.get_model_version_by_alias("prg-muse-reg", CHAMPION)
+    assert champion.version == better != first  # the best coherence
     assert champion.tags["metric.coherence_folded_T_given_S"] == "0.93"
     assert float(champion.tags["metric.val_loss"]) == pytest.approx(
-        json.loads((export / "metrics.json").read_text())["val_loss"], rel=1e-5
+        json.loads((exports[second.run_id] / "metrics.json").read_text())["val_loss"], rel=1e-5
     )
-    assert champion.run_id == trained["run_id"]
+    # the first run evaluated again: its version is updated, not duplicated, and now wins
+    assert register(trained["run_id"], 0.97) == first
+    assert len(client.search_model_versions("name = 'prg-muse-reg'")) == 2
+    assert client.get_model_version_by_alias("prg-muse-reg", CHAMPION).version == first
 
 
 def test_register_refuses_a_folder_that_is_no_export_in_one_line(tmp_path, capsys):

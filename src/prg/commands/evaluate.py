@@ -129,6 +129,7 @@ def _write_reports(result, models, test, settings, report_dir: Path, cfg: DictCo
     checkpoints = {name: loaded.path for name, loaded in models.items()}
     with staged_outputs(report_dir) as staging:
         for name, text in report_texts(result, settings, checkpoints, cfg.data.name).items():
+            (staging / name).parent.mkdir(exist_ok=True)  # plots/
             write_text(staging / name, text, atomic=False)
         if "coherence" in settings.parts and settings.figures:
             (staging / "figures").mkdir()

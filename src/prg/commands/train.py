@@ -238,17 +238,42 @@ def _train(cfg: DictConfig) -> TrainResult:
         log.info("fast dev run (debug=fdr): no MLflow run, no checkpoints")
         return TrainResult(module, trainer, metrics, None, best, last)
     if cfg.get("export_dir") and best and trainer.is_global_zero:  # DDP: rank 0 only
-        _export(Path(cfg.export_dir), best, metrics, logger.run_id, cfg)
+        history = history_rows(logger.experiment, logger.run_id)
+        _export(Path(cfg.export_dir), best, metrics, logger.run_id, cfg, history)
     if trainer.is_global_zero:
         log.info("MLflow run %s: %s", logger.run_id, runs_page(logger.experiment_id))
     return TrainResult(module, trainer, metrics, logger.run_id, best, last)
 
 
-def _export(folder: Path, best: str, metrics: dict[str, float], run_id: str, cfg) -> None:
-    """Copy the best checkpoint to ``<folder>/model.ckpt`` and write ``metrics.json`` (DVC);
-    both are complete before either replaces the previous export."""
+HISTORY_METRICS = ("train/loss", "val/loss", "val/nll_per_dim_T")
+"""The per-epoch curves of ``history.csv`` (every family logs them)."""
+
+
+def history_rows(client, run_id: str) -> list[dict[str, float]]:
+    """The run's per-epoch curves from its MLflow metric history (a resumed run's earlier epochs
+    included): one row per validation, ``epoch``, ``step`` and each of :data:`HISTORY_METRICS`
+    (named as in ``metrics.json``: ``val/loss`` -> ``val_loss``)."""
+    epoch_at = {m.step: int(m.value) for m in client.get_metric_history(run_id, "epoch")}
+    rows: dict[int, dict[str, float]] = {}
+    for key in HISTORY_METRICS:
+        for m in client.get_metric_history(run_id, key):
+            row = rows.setdefault(m.step, {"epoch": epoch_at.get(m.step, -1), "step": m.step})
+            row[key.replace("/", "_")] = m.value
+    return [rows[step] for step in sorted(rows) if "val_loss" in rows[step]]
+
+
+def _export(
+    folder: Path, best: str, metrics: dict[str, float], run_id: str, cfg, history: list[dict]
+) -> None:
+    """Copy the best checkpoint to ``<folder>/model.ckpt``, write ``metrics.json`` and the
+    per-epoch curves ``history.csv`` (DVC metrics and plots); all are complete before any
+    replaces the previous export."""
     with staged_outputs(folder) as staging:
         shutil.copyfile(best, staging / "model.ckpt")
+        columns = ["epoch", "step", *(k.replace("/", "_") for k in HISTORY_METRICS)]
+        lines = [",".join(columns)]
+        lines += [",".join(f"{row.get(c, '')}" for c in columns) for row in history]
+        (staging / "history.csv").write_text("\n".join(lines) + "\n")
         write_json(
             staging / "metrics.json",
             {

@@ -12,7 +12,7 @@ import io
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from prg.evaluation.classifiers import SHAPE_TWINS
 from prg.evaluation.likelihood import (
@@ -22,7 +22,7 @@ from prg.evaluation.likelihood import (
     TABLE1_CELLS,
     density_convention,
 )
-from prg.models.modalities import LETTER, NAMES, TRAJ, letters
+from prg.models.modalities import LABEL, LETTER, NAMES, TRAJ, letters
 
 if TYPE_CHECKING:
     from prg.evaluation.run import Evaluation
@@ -363,4 +363,35 @@ def report_texts(
         )
         kind = next(iter(settings.coherence.temperatures))
         texts["robustness.md"] = robustness_markdown(result.coherence, kind, setup)
+        texts["plots/robustness.csv"] = robustness_plot_csv(result.coherence, kind)
+        texts["plots/coherence_per_class.csv"] = per_class_plot_csv(result.per_class, kind)
     return texts
+
+
+def robustness_plot_csv(rows: list[dict], kind: str) -> str:
+    """The robustness table for ``dvc plots``: one row per input subset (``subset``), one column
+    per model (folded trajectory coherence; empty where the model cannot take the subset)."""
+    traj = [r for r in rows if r["target"] == TRAJ and r["kind"] == kind]
+    subsets = sorted(dict.fromkeys(r["given"] for r in traj), key=_subset_order)
+    models = list(dict.fromkeys(r["model"] for r in traj))
+    value = {(r["model"], r["given"]): r["coherence_folded"] for r in traj}
+    table = [{"subset": "{" + s + "}", **{m: value.get((m, s)) for m in models}} for s in subsets]
+    return to_csv(table, ["subset", *models])
+
+
+def per_class_plot_csv(per_class: Mapping[tuple[str, str, str, str], Any], kind: str) -> str:
+    """Coherence per class for ``dvc plots``: one row per class (``class``: the character), one
+    column per model and cross-modal cell (``<model>_<target>_from_<given>``, ``kind``
+    generation, exact; reconstruction cells left out)."""
+    from prg.alphabet import ALPHABET
+
+    columns = {
+        f"{model}_{LETTER[target]}_from_{given.replace(',', '')}": rates
+        for (model, target, given, k), rates in per_class.items()
+        if k == kind and target != LABEL and LETTER[target] not in given.split(",")
+    }
+    table = [
+        {"class": char, **{name: float(rates[i]) for name, rates in columns.items()}}
+        for i, char in enumerate(ALPHABET)
+    ]
+    return to_csv(table, ["class", *columns])

@@ -186,9 +186,10 @@ def champion_metric(family: str, metrics: dict[str, float]) -> tuple[str, bool]:
 
 
 def register_version(name: str, run_id: str, tracking_uri: str, metrics: dict[str, float]) -> str:
-    """Register the run's logged model as a new version of ``name``, tag it with ``metrics``
-    (``metric.<key>``) and move the :data:`CHAMPION` alias to the best version; returns the new
-    version number."""
+    """Register the run's logged model as a version of ``name``, tag it with ``metrics``
+    (``metric.<key>``) and move the :data:`CHAMPION` alias to the best version; returns the
+    version number. A run registered before keeps its version, whose tags are updated (so
+    registering after each ``make demo`` adds no duplicates)."""
     from mlflow import MlflowClient
     from mlflow.exceptions import MlflowException
 
@@ -202,10 +203,18 @@ def register_version(name: str, run_id: str, tracking_uri: str, metrics: dict[st
     with contextlib.suppress(MlflowException):  # registered already: add a version
         client.create_registered_model(name)
     family = run.data.tags.get("prg.family", "")
-    model_id = model_uri.removeprefix("models:/")
-    version = client.create_model_version(
-        name, source=model_uri, run_id=run_id, model_id=model_id
-    ).version
+    existing = [
+        v
+        for v in client.search_model_versions(f"name = '{name}'")
+        if v.run_id == run_id and v.source == model_uri
+    ]
+    if existing:
+        version = existing[0].version
+    else:
+        model_id = model_uri.removeprefix("models:/")
+        version = client.create_model_version(
+            name, source=model_uri, run_id=run_id, model_id=model_id
+        ).version
     for key, value in sorted(metrics.items()):
         if isinstance(value, int | float) and math.isfinite(value):
             client.set_model_version_tag(name, version, f"metric.{key}", f"{value:.6g}")
