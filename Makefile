@@ -40,9 +40,14 @@ setup: system $(STAMP) ## Create .venv, install system packages, torch (CPU) and
 
 demo: setup ## Run the whole pipeline (dvc repro): data, models, evaluation, Table II, robot, studies
 	dvc repro
+	@for family in cvae avae_ts avae_ti muse; do \
+		$(BIN)/python -m prg.serving register models/$$family --evaluation reports/metrics.json || exit 1; \
+	done
 	@echo
 	@echo "Dataset:  data/prepared/synthetic/ (train/val/test.npz, manifest.json, figures/)"
 	@echo "Models:   models/<family>/model.ckpt and metrics.json  (dvc metrics show)"
+	@echo "Serving:  registered as prg-<family> (alias champion) in mlruns.db: mlflow models serve -m models:/prg-muse@champion --env-manager local"
+	@echo "Plots:    dvc plots show (training curves, coherence per class, robustness) -> dvc_plots/index.html"
 	@echo "Reports:  reports/table1.md, reports/coherence.md, reports/robustness.md, reports/figures/"
 	@echo "Words:    reports/dictaphone/table2.png, table2.md; <word>/<sound|image>/word.rrd (rerun FILE)"
 	@echo "Robot:    reports/simulate/ink.png, page.png, metrics.json; rerun reports/simulate/sim.rrd"

@@ -373,13 +373,15 @@ def hydra_command(
     import hydra
 
     @hydra.main(config_path=str(config_dir()), config_name=config_name, version_base="1.3")
-    def _run(cfg) -> None:
+    def _run(cfg) -> dict[str, float] | None:
+        """The task's metrics (``result.metrics`` when it has them): a multirun job's return
+        value, which a search sweeper (``hparams_search=``) optimises."""
         let_go()  # the config is composed: a signal held meanwhile stops the task now
         run_task = _resolve(task)  # before routing: libraries add their log handlers on import
         route_library_logs()
         logging.captureWarnings(True)  # library warnings to the log too
         try:
-            run_task(cfg)
+            return getattr(run_task(cfg), "metrics", None)
         except PRGError as err:
             fail(command, str(err), err.exit_code)
         except OSError as err:
