@@ -76,3 +76,36 @@ def test_dvc_repro_prepare_equals_prg_prepare_and_is_idempotent(tmp_path):
     assert pulled.returncode == 0, pulled.stdout + pulled.stderr
     assert {p.name: p.read_bytes() for p in by_dvc.iterdir() if p.is_file()} == originals
     assert "up to date" in _dvc(repo, "status", "prepare").stdout
+
+
+def test_dvc_plots_show_renders_the_training_curves_and_coherence_plots(tmp_path):
+    """The pipeline's plots from real outputs: `dvc repro train@cvae` writes its history.csv,
+    `prg-evaluate` (coherence of that model) its reports/plots/, and `dvc plots show` renders
+    them to HTML (the other families' curves are absent here: DVC leaves them out)."""
+    repo = _small_repo(tmp_path)
+    trained = _dvc(repo, "repro", "train@cvae")
+    assert trained.returncode == 0, trained.stdout[-3000:] + trained.stderr[-3000:]
+    history = (repo / "models/cvae/history.csv").read_text().splitlines()
+    assert history[0].split(",")[:4] == ["epoch", "step", "train_loss", "val_loss"]
+    assert len(history) == 1 + 16  # one row per epoch of the quick profile's 16
+    env = {"PRG_CONF_DIR": str(repo / "conf"), "PRG_ROOT": str(repo)}
+    evaluated = run_cli(
+        "prg-evaluate",
+        "parts=[classifiers,coherence]",
+        "families=[cvae]",
+        "classifier.epochs=1",
+        "figures=false",
+        "progress=false",
+        cwd=repo,
+        env=env,
+        timeout=600,
+    )
+    assert evaluated.returncode == 0, evaluated.stderr[-3000:]
+    per_class = (repo / "reports/plots/coherence_per_class.csv").read_text().splitlines()
+    assert per_class[0] == "class,cvae_T_from_S" and len(per_class) == 1 + 62
+    shown = _dvc(repo, "plots", "show", "-o", "plots_html")
+    assert shown.returncode == 0, shown.stdout + shown.stderr
+    html = (repo / "plots_html" / "index.html").read_text()
+    for plot in ("validation_loss", "coherence_per_class", "trajectory_coherence"):
+        assert f"vegaEmbed('#{plot}" in html, plot  # the three plots dvc.yaml declares
+    assert "val_loss" in html and "cvae_T_from_S" in html
