@@ -121,7 +121,13 @@ def test_register_tags_metrics_and_moves_the_champion_alias(trained, tmp_path, s
         evaluation = tmp_path / f"{run_id}.json"
         evaluation.write_text(json.dumps({"muse/coherence_folded_T_given_S": coherence}))
         args = ["register", str(exports[run_id]), "--evaluation", str(evaluation)]
-        assert main([*args, "--name", "prg-muse-reg", "--tracking-uri", trained["uri"]]) == 0
+        args += ["--name", "prg-muse-reg", "--tracking-uri", trained["uri"]]
+        # a process of its own: MLflow's global tracking URI is not this test's
+        done = subprocess.run(
+            [sys.executable, "-m", "prg.serving", *args], capture_output=True, text=True
+        )
+        assert done.returncode == 0, done.stdout + done.stderr[-3000:]
+        assert done.stdout.strip().startswith("registered prg-muse-reg version")
         (version,) = [
             v for v in client.search_model_versions("name = 'prg-muse-reg'") if v.run_id == run_id
         ]

@@ -157,20 +157,15 @@ def log_writer_model(checkpoint: str | Path, run_id: str, tracking_uri: str) -> 
 
     client = MlflowClient(tracking_uri)
     status = client.get_run(run_id).info.status
-    previous = mlflow.get_tracking_uri()
-    mlflow.set_tracking_uri(tracking_uri)
-    try:
-        with mlflow.start_run(run_id=run_id):
-            info = mlflow.pyfunc.log_model(
-                name="model",
-                python_model=str(CODE),
-                artifacts={"checkpoint": str(checkpoint)},
-                signature=signature(),
-                input_example=INPUT_EXAMPLE,
-                pip_requirements=[f"prg=={_version()}"],
-            )
-    finally:
-        mlflow.set_tracking_uri(previous)
+    with _tracking(tracking_uri), mlflow.start_run(run_id=run_id):
+        info = mlflow.pyfunc.log_model(
+            name="model",
+            python_model=str(CODE),
+            artifacts={"checkpoint": str(checkpoint)},
+            signature=signature(),
+            input_example=INPUT_EXAMPLE,
+            pip_requirements=[f"prg=={_version()}"],
+        )
     client.update_run(run_id, status=status)  # start_run's end marked it FINISHED
     client.set_tag(run_id, MODEL_URI_TAG, info.model_uri)
     return info.model_uri
@@ -212,9 +207,10 @@ def register_version(name: str, run_id: str, tracking_uri: str, metrics: dict[st
         version = existing[0].version
     else:
         model_id = model_uri.removeprefix("models:/")
-        version = client.create_model_version(
-            name, source=model_uri, run_id=run_id, model_id=model_id
-        ).version
+        with _tracking(tracking_uri):  # the registry resolves models:/ in the global store
+            version = client.create_model_version(
+                name, source=model_uri, run_id=run_id, model_id=model_id
+            ).version
     for key, value in sorted(metrics.items()):
         if isinstance(value, int | float) and math.isfinite(value):
             client.set_model_version_tag(name, version, f"metric.{key}", f"{value:.6g}")
@@ -298,6 +294,20 @@ def _read_json(path: Path) -> dict:
     if not isinstance(value, dict):
         raise UsageError(f"{path}: expected a JSON object")
     return value
+
+
+@contextlib.contextmanager
+def _tracking(uri: str):
+    """MLflow's global tracking URI set to ``uri`` for the block (the fluent API and the
+    registry's ``models:/`` resolution read it), then restored."""
+    import mlflow
+
+    previous = mlflow.get_tracking_uri()
+    mlflow.set_tracking_uri(uri)
+    try:
+        yield
+    finally:
+        mlflow.set_tracking_uri(previous)
 
 
 def _version() -> str:
