@@ -41,7 +41,7 @@ setup: system $(STAMP) ## Create .venv, install system packages, torch (CPU) and
 demo: setup ## Run the whole pipeline (dvc repro): data, models, evaluation, Table II, robot, studies
 	dvc repro
 	@for family in cvae avae_ts avae_ti muse; do \
-		$(BIN)/python -m prg.serving register models/$$family --evaluation reports/metrics.json || exit 1; \
+		$(BIN)/python -m prg.commands.serving register models/$$family --evaluation reports/metrics.json || exit 1; \
 	done
 	@echo
 	@echo "Dataset:  data/prepared/synthetic/ (train/val/test.npz, manifest.json, figures/)"

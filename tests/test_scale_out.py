@@ -68,7 +68,7 @@ def test_ddp_on_two_cpu_processes_logs_one_run(tmp_path, small_dataset):
         "checkpoints/best.ckpt"
     ]
     assert (tmp_path / "checkpoints/prg/cvae-seed0/best.ckpt").is_file()
-    assert sorted(p.name for p in export.iterdir()) == ["metrics.json", "model.ckpt"]
+    assert sorted(p.name for p in export.iterdir()) == ["history.csv", "metrics.json", "model.ckpt"]
     assert json.loads((export / "metrics.json").read_text())["mlflow_run_id"] == run.info.run_id
     # both ranks share rank 0's Hydra run folder
     (run_dir,) = (tmp_path / "logs/train/runs").iterdir()

@@ -20,8 +20,9 @@ import pytest
 from mlflow import MlflowClient
 
 from prg.commands.cli import compose_config
+from prg.commands.serving import main
 from prg.commands.train import train
-from prg.serving import CHAMPION, main
+from prg.serving import CHAMPION
 from prg.tracking import sqlite_uri
 from prg.writer import Writer
 
@@ -124,7 +125,7 @@ def test_register_tags_metrics_and_moves_the_champion_alias(trained, tmp_path, s
         args += ["--name", "prg-muse-reg", "--tracking-uri", trained["uri"]]
         # a process of its own: MLflow's global tracking URI is not this test's
         done = subprocess.run(
-            [sys.executable, "-m", "prg.serving", *args], capture_output=True, text=True
+            [sys.executable, "-m", "prg.commands.serving", *args], capture_output=True, text=True
         )
         assert done.returncode == 0, done.stdout + done.stderr[-3000:]
         assert done.stdout.strip().startswith("registered prg-muse-reg version")

@@ -178,10 +178,12 @@ def test_a_moved_store_is_re_pointed(trained, tmp_path):
     moved = shutil.copytree(root, tmp_path / "moved")  # the checkout, elsewhere
     before, after = root / "mlartifacts", moved / "mlartifacts"
 
-    # the two experiments' locations and the two runs'
-    assert move_store(moved / "mlruns.db", before, after) == 4
+    # the two experiments' locations, the two runs' and the training run's logged model's
+    assert move_store(moved / "mlruns.db", before, after) == 5
     client = MlflowClient(sqlite_uri(moved / "mlruns.db"))
     run = client.get_run(result.run_id)
+    model_id = run.data.tags["prg.model_uri"].removeprefix("models:/")
+    assert client.get_logged_model(model_id).artifact_location.startswith(after.as_uri())
     assert run.info.artifact_uri == f"{after.as_uri()}/{result.run_id}/artifacts"
     assert client.get_experiment(run.info.experiment_id).artifact_location == after.as_uri()
     config = after / result.run_id / "artifacts/config/config.yaml"

@@ -34,7 +34,6 @@ __all__ = [
     "WriterModel",
     "champion_metric",
     "log_writer_model",
-    "main",
     "register_version",
     "signature",
     "word_row",
@@ -234,66 +233,6 @@ def _move_champion(client, name: str, family: str) -> None:
     if scored:  # evaluated versions first, then the best value, then the newest
         best = min(scored, key=lambda t: (t[0], t[1], -t[2]))
         client.set_registered_model_alias(name, CHAMPION, str(best[2]))
-
-
-def main(argv: list[str] | None = None) -> int:
-    """``python -m prg.serving register EXPORT_DIR [--evaluation JSON]``: register the model
-    exported to ``EXPORT_DIR`` (``models/<family>``: its ``metrics.json`` names the run) as
-    ``prg-<family>`` with its training metrics and, given the evaluation's ``metrics.json``
-    (``reports/metrics.json``), its coherence and Table I cells."""
-    import argparse
-
-    from prg.commands.cli import project_root
-    from prg.tracking import tracking_uri
-
-    parser = argparse.ArgumentParser(prog="python -m prg.serving", description=main.__doc__)
-    sub = parser.add_subparsers(dest="command", required=True)
-    reg = sub.add_parser("register", help="register an exported model with its metrics")
-    reg.add_argument("export_dir", type=Path)
-    reg.add_argument("--evaluation", type=Path, default=None, help="prg-evaluate's metrics.json")
-    reg.add_argument("--name", default=None, help="registered model name (default prg-<family>)")
-    reg.add_argument(
-        "--tracking-uri",
-        default=None,
-        help="default: MLFLOW_TRACKING_URI, else the project's mlruns.db",
-    )
-    args = parser.parse_args(argv)
-    try:
-        exported = _read_json(args.export_dir / "metrics.json")
-        family, run_id = exported.get("family"), exported.get("mlflow_run_id")
-        if not isinstance(family, str) or not isinstance(run_id, str):
-            raise UsageError(
-                f"{args.export_dir / 'metrics.json'}: expected the family and mlflow_run_id "
-                "of a prg-train export (export_dir=...)"
-            )
-        metrics = {k: v for k, v in exported.items() if isinstance(v, int | float)}
-        if args.evaluation is not None:
-            evaluated = _read_json(args.evaluation)
-            evaluated = evaluated.get("metrics", evaluated)
-            prefix = f"{family}/"
-            metrics.update(
-                {k.removeprefix(prefix): v for k, v in evaluated.items() if k.startswith(prefix)}
-            )
-        uri = args.tracking_uri or tracking_uri(None, project_root()[0])
-        name = args.name or f"prg-{family}"
-        version = register_version(name, run_id, uri, metrics)
-    except UsageError as err:
-        print(f"python -m prg.serving: {err}")
-        return 2
-    print(f"registered {name} version {version} (models:/{name}/{version})")
-    return 0
-
-
-def _read_json(path: Path) -> dict:
-    try:
-        value = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise UsageError(f"{path} does not exist") from None
-    except (OSError, ValueError) as err:
-        raise UsageError(f"{path} is not readable JSON ({err})") from None
-    if not isinstance(value, dict):
-        raise UsageError(f"{path}: expected a JSON object")
-    return value
 
 
 @contextlib.contextmanager
