@@ -171,7 +171,9 @@ def test_a_registered_version_is_served_over_http(trained, tmp_path):
         == 0
     )
     port = _free_port()
-    env = {**os.environ, "MLFLOW_TRACKING_URI": trained["uri"]}
+    # the server runs `uvicorn` by name: this environment's bin first, as an activated venv has it
+    path = f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}"
+    env = {**os.environ, "PATH": path, "MLFLOW_TRACKING_URI": trained["uri"]}
     server = subprocess.Popen(
         [
             str(BIN / "mlflow"),
