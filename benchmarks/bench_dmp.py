@@ -86,6 +86,23 @@ def load_their_dmp() -> tuple[type, str]:
         return module.DMP, "movement_primitives.dmp._dmp (pytransform3d missing)"
 
 
+def machine(their_import: str, **extra: str) -> dict:
+    """The run's machine and library versions, for the JSON report (both DMP benchmarks)."""
+    import movement_primitives
+
+    return {
+        "cpus": os.cpu_count(),
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "movement_primitives": getattr(movement_primitives, "__version__", "?"),
+        "movement_primitives_import": their_import,
+        **extra,
+        "processor": platform.processor() or platform.machine(),
+        "load_avg_at_end": [round(x, 2) for x in os.getloadavg()],
+    }
+
+
 def rmse(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.sum((a - b) ** 2, axis=1))))
 
@@ -154,8 +171,6 @@ def main() -> None:
     args = parser.parse_args()
 
     their_dmp, their_import = load_their_dmp()
-    import movement_primitives
-
     rows = []
     with threadpool_limits(limits=args.threads):
         # one untimed run of each side first: imports, caches, BLAS start-up
@@ -201,16 +216,7 @@ def main() -> None:
         equal_error = [equal_error_row(their_dmp, n, rows, args) for n in args.points]
 
     report = {
-        "machine": {
-            "cpus": os.cpu_count(),
-            "python": platform.python_version(),
-            "numpy": np.__version__,
-            "scipy": scipy.__version__,
-            "movement_primitives": getattr(movement_primitives, "__version__", "?"),
-            "movement_primitives_import": their_import,
-            "processor": platform.processor() or platform.machine(),
-            "load_avg_at_end": [round(x, 2) for x in os.getloadavg()],
-        },
+        "machine": machine(their_import),
         "settings": {
             "reps": args.reps,
             "threads": args.threads,

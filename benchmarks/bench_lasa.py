@@ -31,19 +31,16 @@ Prints a table and writes ``benchmarks/results/bench_lasa.json``.
 from __future__ import annotations
 
 import argparse
-import os
-import platform
 import statistics
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
-import scipy
 from threadpoolctl import threadpool_limits
 
 sys.path.insert(0, str(Path(__file__).parent))
-from bench_dmp import load_their_dmp, rmse
+from bench_dmp import load_their_dmp, machine, rmse
 
 from prg.data.lasa import DISTRIBUTION, LasaDemo, load_demos
 from prg.files import write_json
@@ -130,8 +127,6 @@ def main() -> None:
     args = parser.parse_args()
 
     their_dmp, their_import = load_their_dmp()
-    import movement_primitives
-
     demos = load_demos(args.shapes)
     with threadpool_limits(limits=args.threads):
         run_ours(demos[0], 20, "demonstrated")  # untimed first runs: imports, caches, BLAS
@@ -142,17 +137,7 @@ def main() -> None:
             print(f"{n_basis} basis functions: {len(demos)} demonstrations done", flush=True)
 
     report = {
-        "machine": {
-            "cpus": os.cpu_count(),
-            "python": platform.python_version(),
-            "numpy": np.__version__,
-            "scipy": scipy.__version__,
-            "movement_primitives": getattr(movement_primitives, "__version__", "?"),
-            "movement_primitives_import": their_import,
-            "data": DISTRIBUTION,
-            "processor": platform.processor() or platform.machine(),
-            "load_avg_at_end": [round(x, 2) for x in os.getloadavg()],
-        },
+        "machine": machine(their_import, data=DISTRIBUTION),
         "settings": {
             "reps": args.reps,
             "threads": args.threads,

@@ -29,17 +29,17 @@ from prg.writer import Writer
 BIN = Path(sys.executable).parent
 
 
-@pytest.fixture(scope="module")
-def trained(tmp_path_factory, small_dataset):
-    """A MUSE trained for a few steps, exported, its best checkpoint logged as an MLflow model."""
-    root = tmp_path_factory.mktemp("serving")
+def _train_muse(root: Path, data_dir: Path, seed: int):
+    """A MUSE trained for a few steps into ``root``'s store, exported to ``models/muse`` (seed
+    0) or ``models/muse-<seed>``."""
     cfg = compose_config(
         "train",
         [
             "model=muse",
+            f"seed={seed}",
             f"paths.root_dir={root}",
-            f"paths.data_dir={small_dataset}",
-            f"export_dir={root / 'models' / 'muse'}",
+            f"paths.data_dir={data_dir}",
+            f"export_dir={root / 'models' / ('muse' if seed == 0 else f'muse-{seed}')}",
             "trainer.max_epochs=1",
             "trainer.limit_train_batches=3",
             "trainer.limit_val_batches=2",
@@ -47,7 +47,14 @@ def trained(tmp_path_factory, small_dataset):
             "callbacks.figures=null",
         ],
     )
-    result = train(cfg)
+    return train(cfg)
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory, small_dataset):
+    """A MUSE trained for a few steps, exported, its best checkpoint logged as an MLflow model."""
+    root = tmp_path_factory.mktemp("serving")
+    result = _train_muse(root, small_dataset, seed=0)
     uri = sqlite_uri(root / "mlruns.db")
     return {"root": root, "uri": uri, "run_id": result.run_id, "ckpt": result.best_checkpoint}
 
@@ -89,25 +96,6 @@ def test_a_row_of_letter_trajectories_alone_is_read_and_written(trained):
     assert np.allclose(np.array(json.loads(out["rollout"][0])), expected, atol=1e-5)
     with pytest.raises(Exception, match="give a text, trajectories or both"):
         model.predict(pd.DataFrame({"text": [None], "trajectories": [None]}))
-
-
-def _train_muse(root: Path, data_dir: Path, seed: int):
-    cfg = compose_config(
-        "train",
-        [
-            "model=muse",
-            f"seed={seed}",
-            f"paths.root_dir={root}",
-            f"paths.data_dir={data_dir}",
-            f"export_dir={root / 'models' / f'muse-{seed}'}",
-            "trainer.max_epochs=1",
-            "trainer.limit_train_batches=3",
-            "trainer.limit_val_batches=2",
-            "trainer.enable_progress_bar=false",
-            "callbacks.figures=null",
-        ],
-    )
-    return train(cfg)
 
 
 def test_register_tags_metrics_and_moves_the_champion_alias(trained, tmp_path, small_dataset):

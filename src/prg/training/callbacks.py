@@ -18,7 +18,7 @@ from lightning.pytorch.loggers import MLFlowLogger
 from prg.files import atomic_path
 from prg.models.modalities import MODALITIES, TRAJ
 from prg.plotting import pyplot
-from prg.serving import log_writer_model
+from prg.serving import log_writer_model, register_version
 
 log = logging.getLogger(__name__)
 
@@ -228,8 +228,6 @@ class MLflowRun(L.Callback):
         logger.experiment.log_artifact(logger.run_id, best, "checkpoints")
         if not self.log_model:
             return
-        from prg.serving import register_version
-
         model_uri = log_writer_model(best, logger.run_id, logger._tracking_uri)
         log.info("logged the MLflow model %s (prg.serving.WriterModel)", model_uri)
         if self.register_as:
