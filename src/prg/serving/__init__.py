@@ -238,15 +238,25 @@ def _move_champion(client, name: str, family: str) -> None:
 @contextlib.contextmanager
 def _tracking(uri: str):
     """MLflow's global tracking URI set to ``uri`` for the block (the fluent API and the
-    registry's ``models:/`` resolution read it), then restored."""
+    registry's ``models:/`` resolution read it), then restored; MLflow's artifact progress bars
+    off meanwhile: logging a model downloads its artifacts to validate the input example, and
+    those bars would take the place of the training's own progress bar in its output."""
+    import os
+
     import mlflow
 
     previous = mlflow.get_tracking_uri()
+    bars = os.environ.get("MLFLOW_ENABLE_ARTIFACTS_PROGRESS_BAR")
     mlflow.set_tracking_uri(uri)
+    os.environ["MLFLOW_ENABLE_ARTIFACTS_PROGRESS_BAR"] = "false"
     try:
         yield
     finally:
         mlflow.set_tracking_uri(previous)
+        if bars is None:
+            os.environ.pop("MLFLOW_ENABLE_ARTIFACTS_PROGRESS_BAR", None)
+        else:
+            os.environ["MLFLOW_ENABLE_ARTIFACTS_PROGRESS_BAR"] = bars
 
 
 def _version() -> str:
