@@ -410,6 +410,33 @@ def test_muse_mode_seeking_is_the_distance_to_the_nearest_code_of_the_same_class
     assert "mode_label" not in terms
 
 
+def test_muse_mode_bank_keeps_the_last_codes_of_each_class_across_batches():
+    """With ``mode_bank`` the nearest code is searched among the last N codes of the sample's
+    class from every batch seen (a ring per class), against a plain loop over what was stored;
+    the bank is not part of the checkpoint."""
+    model = make_model("muse", mode_seeking=1.0, mode_bank=3)
+    g = torch.Generator().manual_seed(2)
+    seen = {m: {} for m in ("traj", "image")}  # class -> codes in the order they were stored
+    for labels in (torch.tensor([3, 3, 7]), torch.tensor([3, 9, 3, 7])):
+        codes = {m: torch.randn(len(labels), 16, generator=g) for m in ALL}
+        experts = {m: model.top_experts[m](codes[m]) for m in ALL}
+        for m in seen:
+            for y, code in zip(labels.tolist(), codes[m], strict=True):
+                seen[m].setdefault(y, []).append(code)
+        terms = {}
+        model._mode_seeking(experts, codes, labels, terms)
+        mean = product_of_experts([experts["label"][0]], [experts["label"][1]])[0]
+        for m in seen:
+            decoded = model.top_decoders[m](mean)
+            nearest = [
+                min(float((decoded[i] - c).pow(2).sum()) for c in seen[m][y][-3:])
+                for i, y in enumerate(labels.tolist())
+            ]
+            assert float(terms[f"mode_{m}"]) == pytest.approx(np.mean(nearest), rel=1e-5)
+    assert int(model.bank_filled[3].sum()) == 3 and int(model.bank_filled[9].sum()) == 1
+    assert not any("bank" in key for key in model.state_dict())
+
+
 def test_muse_mode_seeking_trains_the_label_expert_and_top_decoders_only():
     model = make_model("muse", mode_seeking=1.0)
     batch = make_batch()

@@ -221,6 +221,7 @@ RANGES: dict[str, Range] = {
     "model.module.model.beta": non_negative(WEIGHT_MAX),
     "model.module.model.delta": non_negative(WEIGHT_MAX),
     "model.module.model.mode_seeking": non_negative(WEIGHT_MAX),
+    "model.module.model.mode_bank": count(0, 4096),
     "model.module.model.kl_weight": non_negative(WEIGHT_MAX),
     "model.module.model.lambdas.*": non_negative(WEIGHT_MAX),
     "model.module.model.alphas.*": non_negative(WEIGHT_MAX),

@@ -14,8 +14,9 @@ Loss per sample, averaged over the batch (weights by role, the paper's defaults)
 - ``+ delta * mean over proper non-empty subsets S of SKL(q(c | sg(z_S)), q(c | sg(z_all)))``
 - ``+ mode_seeking * sum_{m != label} gamma_m min_{j: y_j = y} ||d_m(mu_label) - sg(z_m,j)||^2``
   with ``mu_label`` the mean of q(c | label) (0 in the paper; :meth:`MUSE._mode_seeking`): the
-  label posterior's mean decodes to the nearest code of its class in the batch, a real style,
-  not the class's average code
+  label posterior's mean decodes to the nearest code of its class, a real style, not the class's
+  average code; the candidates j are the batch's samples or, with ``mode_bank`` N > 0, the last
+  N samples of each class seen in training
 
 The top KL and subset SKL, the top level's regularisers, are multiplied by ``top_scale`` (1
 outside training), which the training loop can ramp up from 0: both are minimised by experts
@@ -37,6 +38,7 @@ from itertools import combinations
 import torch
 from torch import nn
 
+from prg.alphabet import NUM_CLASSES
 from prg.models.base import Gaussian, ImportancePath, Inputs, MultimodalVAE
 from prg.models.components import GaussianHead, mlp
 from prg.models.fusion import kl_standard_normal, product_of_experts, reparameterise, symmetric_kl
@@ -75,6 +77,7 @@ class MUSE(MultimodalVAE):
         beta: float = 1.0,
         delta: float = 1.0,
         mode_seeking: float = 0.0,
+        mode_bank: int = 0,
     ):
         super().__init__(tuple(modalities), latent_dim, traj_std)
         if len(self.modalities) < 2:
@@ -88,6 +91,25 @@ class MUSE(MultimodalVAE):
         self.alphas = weights(alphas, lambda m: 1.0)
         self.gammas = weights(gammas, lambda m: 10.0)
         self.beta, self.delta, self.mode_seeking = beta, delta, mode_seeking
+        self.mode_bank = int(mode_bank)
+        if self.mode_seeking and self.mode_bank and "label" in self.modalities:
+            # The last mode_bank bottom codes seen per class and modality (not saved in
+            # checkpoints: a resumed run refills it within a few batches).
+            for m in self.modalities:
+                if m != "label":
+                    self.register_buffer(
+                        f"bank_{m}",
+                        torch.zeros(NUM_CLASSES, self.mode_bank, latent_dim),
+                        persistent=False,
+                    )
+            self.register_buffer(
+                "bank_filled",
+                torch.zeros(NUM_CLASSES, self.mode_bank, dtype=torch.bool),
+                persistent=False,
+            )
+            self.register_buffer(
+                "bank_next", torch.zeros(NUM_CLASSES, dtype=torch.long), persistent=False
+            )
         self.top_scale = 1.0  # the training loop's warm-up of the top-level regularisers
         self.top_latent_dim = top_latent_dim
         self.encoders = nn.ModuleDict(
@@ -189,24 +211,49 @@ class MUSE(MultimodalVAE):
     def _mode_seeking(self, experts, codes, labels, terms) -> torch.Tensor:
         """Winner-takes-all reconstruction from the label posterior's mean: for each sample,
         the squared distance from d_m(mean of q(c | label)) to the nearest bottom code z_m of a
-        sample of the same class in the batch (itself included), weighted by gamma_m.
+        sample of the same class, weighted by gamma_m. The candidates are the batch's samples
+        of that class (itself included) or, with ``mode_bank`` > 0, the last ``mode_bank``
+        codes of that class seen in training, this batch's among them.
 
         The top decoders are trained by squared error onto z_m, so from the broad label
         posterior they regress to the class's average code, which decodes to a blend of its
         styles. This term asks that mean to decode to one real style instead (a mode, not the
-        mean), without touching the joint posterior's reconstruction."""
+        mean), without touching the joint posterior's reconstruction. With one or two samples
+        of a class per batch the nearest of them is nearly a random one, which again pulls
+        toward the average; a bank of many offers a real choice, so the target is the style
+        nearest to what the decoder already gives, and the decoder bends least."""
         label_mean = self._fuse({"label": experts["label"]}).mu
+        if self.mode_bank:
+            self._bank_store(codes, labels)
         same_class = labels[:, None] == labels[None, :]
         total = 0.0
         for m in self.modalities:
             if m == "label":
                 continue
             decoded = self.top_decoders[m](label_mean)
-            distance = (decoded[:, None, :] - codes[m][None, :, :]).pow(2).sum(-1)
-            nearest = distance.masked_fill(~same_class, float("inf")).amin(1).mean()
+            if self.mode_bank:
+                candidates = getattr(self, f"bank_{m}")[labels]  # n x bank x latent
+                distance = (decoded[:, None, :] - candidates).pow(2).sum(-1)
+                distance = distance.masked_fill(~self.bank_filled[labels], float("inf"))
+            else:
+                distance = (decoded[:, None, :] - codes[m][None, :, :]).pow(2).sum(-1)
+                distance = distance.masked_fill(~same_class, float("inf"))
+            nearest = distance.amin(1).mean()
             terms[f"mode_{m}"] = nearest
             total = total + self.gammas[m] * nearest
         return total
+
+    @torch.no_grad()
+    def _bank_store(self, codes, labels) -> None:
+        """Write the batch's codes into each class's ring of ``mode_bank`` slots."""
+        onehot = torch.nn.functional.one_hot(labels, NUM_CLASSES)
+        rank = (onehot.cumsum(0) - 1).gather(1, labels[:, None]).squeeze(1)
+        slot = (self.bank_next[labels] + rank) % self.mode_bank
+        for m in self.modalities:
+            if m != "label":
+                getattr(self, f"bank_{m}")[labels, slot] = codes[m].float()
+        self.bank_filled[labels, slot] = True
+        self.bank_next += onehot.sum(0)
 
     def importance_path(self, target: str, x_target: torch.Tensor, given: Inputs) -> ImportancePath:
         """Marginal log p(x_m) (``given`` empty) uses the bottom VAE of m (proposal q(z_m | x_m),
