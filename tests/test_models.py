@@ -21,6 +21,7 @@ from prg.data.datamodule import PRGDataModule
 from prg.errors import UsageError
 from prg.models.avae import AVAE
 from prg.models.components import (
+    TRAJ_DIM,
     ImageDecoder,
     ImageEncoder,
     LabelDecoder,
@@ -433,7 +434,41 @@ def test_muse_mode_bank_keeps_the_last_codes_of_each_class_across_batches():
                 for i, y in enumerate(labels.tolist())
             ]
             assert float(terms[f"mode_{m}"]) == pytest.approx(np.mean(nearest), rel=1e-5)
-    assert int(model.bank_filled[3].sum()) == 3 and int(model.bank_filled[9].sum()) == 1
+    filled = model.banks["traj"].filled
+    assert int(filled[3].sum()) == 3 and int(filled[9].sum()) == 1
+    assert not any("bank" in key for key in model.state_dict())
+
+
+@pytest.mark.parametrize("bank", [0, 3])
+def test_cvae_mode_seeking_reconstructs_the_nearest_trajectory_of_the_class_from_z_zero(bank):
+    """From z = 0 and each sample's label, the squared error to the nearest trajectory of its
+    class over 2 std^2: among the batch's (bank 0) or the last ``bank`` seen, against a plain
+    loop; only the decoder gets its gradient, and the loss adds it at its weight."""
+    model = make_model("cvae", mode_seeking=2.0, mode_bank=bank)
+    g = torch.Generator().manual_seed(3)
+    seen: dict[int, list] = {}
+    for labels in (torch.tensor([1, 1, 4]), torch.tensor([1, 4, 1, 1, 5])):
+        batch = {"traj": torch.randn(len(labels), TRAJ_DIM, generator=g), "label": labels}
+        for y, x in zip(labels.tolist(), batch["traj"], strict=True):
+            seen.setdefault(y, []).append(x)
+        model.zero_grad()
+        terms = model.elbo(batch)
+        decoded = model.decode(torch.zeros(len(labels), 16), "traj", batch)
+        nearest = []
+        for i, y in enumerate(labels.tolist()):
+            pool = (
+                seen[y][-bank:]
+                if bank
+                else [batch["traj"][j] for j in range(len(labels)) if labels[j] == y]
+            )
+            nearest.append(min(float((decoded[i] - x).pow(2).sum()) for x in pool) / 0.02)
+        assert float(terms["mode_traj"]) == pytest.approx(np.mean(nearest), rel=1e-5)
+        torch.testing.assert_close(
+            terms["loss"], terms["rec_traj"] + terms["kl"] + 2.0 * terms["mode_traj"]
+        )
+    terms["mode_traj"].backward()
+    assert all(p.grad is None or p.grad.abs().sum() == 0 for p in model.encoder.parameters())
+    assert any(p.grad.abs().sum() > 0 for p in model.decoder.parameters())
     assert not any("bank" in key for key in model.state_dict())
 
 

@@ -149,3 +149,38 @@ class ImageDecoder(nn.Module):
 
     def forward(self, z: torch.Tensor) -> torch.Tensor:
         return self.deconv(self.fc(z).view(-1, 256, 3, 3))
+
+
+class ClassRing(nn.Module):
+    """The last ``size`` vectors seen per class (a ring per class), for a nearest-neighbour
+    search among real samples of the same class across batches (the mode-seeking terms).
+
+    Its buffers are not saved in checkpoints: a resumed run refills them within a few batches,
+    and a checkpoint keeps the paper's parameters only."""
+
+    def __init__(self, num_classes: int, size: int, dim: int):
+        super().__init__()
+        self.size = size
+        self.register_buffer("values", torch.zeros(num_classes, size, dim), persistent=False)
+        self.register_buffer(
+            "filled", torch.zeros(num_classes, size, dtype=torch.bool), persistent=False
+        )
+        self.register_buffer(
+            "next_slot", torch.zeros(num_classes, dtype=torch.long), persistent=False
+        )
+
+    @torch.no_grad()
+    def store(self, values: torch.Tensor, labels: torch.Tensor) -> None:
+        """Write each row of ``values`` into its class's ring, oldest slot first."""
+        onehot = nn.functional.one_hot(labels, self.values.shape[0])
+        rank = (onehot.cumsum(0) - 1).gather(1, labels[:, None]).squeeze(1)
+        slot = (self.next_slot[labels] + rank) % self.size
+        self.values[labels, slot] = values.detach().to(self.values.dtype)
+        self.filled[labels, slot] = True
+        self.next_slot += onehot.sum(0)
+
+    def nearest_distance(self, queries: torch.Tensor, labels: torch.Tensor) -> torch.Tensor:
+        """Per query, the squared distance to the nearest stored vector of its class (inf when
+        its class has none yet)."""
+        distance = (queries[:, None, :] - self.values[labels]).pow(2).sum(-1)
+        return distance.masked_fill(~self.filled[labels], float("inf")).amin(1)

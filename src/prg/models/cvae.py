@@ -3,6 +3,10 @@
 Encoder q(z | x_T, y) on concat(x_T, onehot(y)); decoder p(x_T | z, y) on concat(z, onehot(y));
 prior N(0, I). Loss: reconstruction + KL. Generation from a label: z from the prior (its mean 0
 with ``temperature=0``), decoded with the label.
+
+Optional, not in the paper (``mode_seeking`` > 0, :meth:`CVAE._mode_seeking`): the prior mean
+decoded with a label must also reconstruct the nearest of the last ``mode_bank`` training
+trajectories of that class, so that it writes one real style of its letter, not a blend.
 """
 
 from __future__ import annotations
@@ -14,18 +18,27 @@ import torch.nn.functional as F
 
 from prg.alphabet import NUM_CLASSES
 from prg.models.base import Gaussian, ImportancePath, Inputs, MultimodalVAE
-from prg.models.components import TrajectoryDecoder, TrajectoryEncoder
+from prg.models.components import TRAJ_DIM, ClassRing, TrajectoryDecoder, TrajectoryEncoder
 from prg.models.fusion import kl_standard_normal, reparameterise
 
 
 class CVAE(MultimodalVAE):
     family = "cvae"
 
-    def __init__(self, latent_dim: int = 16, traj_std: float = 0.1, kl_weight: float = 1.0):
+    def __init__(
+        self,
+        latent_dim: int = 16,
+        traj_std: float = 0.1,
+        kl_weight: float = 1.0,
+        mode_seeking: float = 0.0,
+        mode_bank: int = 0,
+    ):
         super().__init__(("traj", "label"), latent_dim, traj_std)
-        self.kl_weight = kl_weight
+        self.kl_weight, self.mode_seeking, self.mode_bank = kl_weight, mode_seeking, int(mode_bank)
         self.encoder = TrajectoryEncoder(latent_dim, extra_inputs=NUM_CLASSES)
         self.decoder = TrajectoryDecoder(latent_dim, extra_inputs=NUM_CLASSES)
+        if mode_seeking and self.mode_bank:
+            self.bank = ClassRing(NUM_CLASSES, self.mode_bank, TRAJ_DIM)
 
     accepted_inputs: ClassVar[list[tuple[str, ...]]] = [("traj", "label"), ("label",)]
     generated_modalities: ClassVar[tuple[str, ...]] = ("traj",)
@@ -56,7 +69,32 @@ class CVAE(MultimodalVAE):
         terms = {"rec_traj": rec.mean(), "kl": kl.mean()}
         terms["loss"] = terms["rec_traj"] + self.kl_weight * terms["kl"]
         terms["elbo"] = -(terms["rec_traj"] + terms["kl"])
+        if self.mode_seeking:
+            terms["mode_traj"] = self._mode_seeking(batch)
+            terms["loss"] = terms["loss"] + self.mode_seeking * terms["mode_traj"]
         return terms
+
+    def _mode_seeking(self, batch: Inputs) -> torch.Tensor:
+        """The reconstruction loss (the squared error over 2 traj_std^2, as in ``rec_traj``) of
+        the nearest trajectory of each sample's class, from the prior mean decoded with its
+        label. The candidates are the batch's samples of that class or, with ``mode_bank`` >
+        0, the last ``mode_bank`` of that class seen in training, this batch's among them.
+
+        Decoded from z = 0 a label gives the decoder's average over its class's styles, and a
+        blend of styles can read as another letter; the nearest real trajectory is the style
+        closest to what the decoder already writes, so the decoder bends least."""
+        traj, labels = batch["traj"], batch["label"]
+        decoded = self.decode(
+            torch.zeros(len(labels), self.latent_dim, device=traj.device), "traj", batch
+        )
+        if self.mode_bank:
+            self.bank.store(traj, labels)
+            nearest = self.bank.nearest_distance(decoded, labels)
+        else:
+            distance = (decoded[:, None, :] - traj[None, :, :]).pow(2).sum(-1)
+            same_class = labels[:, None] == labels[None, :]
+            nearest = distance.masked_fill(~same_class, float("inf")).amin(1)
+        return (nearest / (2 * self.likelihoods.traj_std**2)).mean()
 
     likelihood_cells: ClassVar[list[tuple[str, tuple[str, ...]]]] = [("traj", ("label",))]
 

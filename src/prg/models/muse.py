@@ -40,7 +40,7 @@ from torch import nn
 
 from prg.alphabet import NUM_CLASSES
 from prg.models.base import Gaussian, ImportancePath, Inputs, MultimodalVAE
-from prg.models.components import GaussianHead, mlp
+from prg.models.components import ClassRing, GaussianHead, mlp
 from prg.models.fusion import kl_standard_normal, product_of_experts, reparameterise, symmetric_kl
 from prg.models.modalities import MODALITIES
 
@@ -93,22 +93,12 @@ class MUSE(MultimodalVAE):
         self.beta, self.delta, self.mode_seeking = beta, delta, mode_seeking
         self.mode_bank = int(mode_bank)
         if self.mode_seeking and self.mode_bank and "label" in self.modalities:
-            # The last mode_bank bottom codes seen per class and modality (not saved in
-            # checkpoints: a resumed run refills it within a few batches).
-            for m in self.modalities:
-                if m != "label":
-                    self.register_buffer(
-                        f"bank_{m}",
-                        torch.zeros(NUM_CLASSES, self.mode_bank, latent_dim),
-                        persistent=False,
-                    )
-            self.register_buffer(
-                "bank_filled",
-                torch.zeros(NUM_CLASSES, self.mode_bank, dtype=torch.bool),
-                persistent=False,
-            )
-            self.register_buffer(
-                "bank_next", torch.zeros(NUM_CLASSES, dtype=torch.long), persistent=False
+            self.banks = nn.ModuleDict(
+                {
+                    m: ClassRing(NUM_CLASSES, self.mode_bank, latent_dim)
+                    for m in self.modalities
+                    if m != "label"
+                }
             )
         self.top_scale = 1.0  # the training loop's warm-up of the top-level regularisers
         self.top_latent_dim = top_latent_dim
@@ -223,8 +213,6 @@ class MUSE(MultimodalVAE):
         toward the average; a bank of many offers a real choice, so the target is the style
         nearest to what the decoder already gives, and the decoder bends least."""
         label_mean = self._fuse({"label": experts["label"]}).mu
-        if self.mode_bank:
-            self._bank_store(codes, labels)
         same_class = labels[:, None] == labels[None, :]
         total = 0.0
         for m in self.modalities:
@@ -232,28 +220,14 @@ class MUSE(MultimodalVAE):
                 continue
             decoded = self.top_decoders[m](label_mean)
             if self.mode_bank:
-                candidates = getattr(self, f"bank_{m}")[labels]  # n x bank x latent
-                distance = (decoded[:, None, :] - candidates).pow(2).sum(-1)
-                distance = distance.masked_fill(~self.bank_filled[labels], float("inf"))
+                self.banks[m].store(codes[m], labels)
+                nearest = self.banks[m].nearest_distance(decoded, labels).mean()
             else:
                 distance = (decoded[:, None, :] - codes[m][None, :, :]).pow(2).sum(-1)
-                distance = distance.masked_fill(~same_class, float("inf"))
-            nearest = distance.amin(1).mean()
+                nearest = distance.masked_fill(~same_class, float("inf")).amin(1).mean()
             terms[f"mode_{m}"] = nearest
             total = total + self.gammas[m] * nearest
         return total
-
-    @torch.no_grad()
-    def _bank_store(self, codes, labels) -> None:
-        """Write the batch's codes into each class's ring of ``mode_bank`` slots."""
-        onehot = torch.nn.functional.one_hot(labels, NUM_CLASSES)
-        rank = (onehot.cumsum(0) - 1).gather(1, labels[:, None]).squeeze(1)
-        slot = (self.bank_next[labels] + rank) % self.mode_bank
-        for m in self.modalities:
-            if m != "label":
-                getattr(self, f"bank_{m}")[labels, slot] = codes[m].float()
-        self.bank_filled[labels, slot] = True
-        self.bank_next += onehot.sum(0)
 
     def importance_path(self, target: str, x_target: torch.Tensor, given: Inputs) -> ImportancePath:
         """Marginal log p(x_m) (``given`` empty) uses the bottom VAE of m (proposal q(z_m | x_m),
