@@ -436,6 +436,11 @@ def test_muse_mode_bank_keeps_the_last_codes_of_each_class_across_batches():
             assert float(terms[f"mode_{m}"]) == pytest.approx(np.mean(nearest), rel=1e-5)
     filled = model.banks["traj"].filled
     assert int(filled[3].sum()) == 3 and int(filled[9].sum()) == 1
+    model.eval()  # validation batches never enter the bank
+    codes = {m: torch.randn(2, 16, generator=g) for m in ALL}
+    experts = {m: model.top_experts[m](codes[m]) for m in ALL}
+    model._mode_seeking(experts, codes, torch.tensor([11, 12]), {})
+    assert not model.banks["traj"].filled[[11, 12]].any()
     assert not any("bank" in key for key in model.state_dict())
 
 
@@ -470,6 +475,11 @@ def test_cvae_mode_seeking_reconstructs_the_nearest_trajectory_of_the_class_from
     assert all(p.grad is None or p.grad.abs().sum() == 0 for p in model.encoder.parameters())
     assert any(p.grad.abs().sum() > 0 for p in model.decoder.parameters())
     assert not any("bank" in key for key in model.state_dict())
+    before = model.bank.values.clone() if bank else None
+    model.eval()
+    model.elbo({"traj": torch.randn(3, TRAJ_DIM, generator=g), "label": torch.tensor([1, 4, 5])})
+    if bank:  # validation batches never enter the bank
+        torch.testing.assert_close(model.bank.values, before)
 
 
 def test_muse_mode_seeking_trains_the_label_expert_and_top_decoders_only():

@@ -153,7 +153,8 @@ class ImageDecoder(nn.Module):
 
 class ClassRing(nn.Module):
     """The last ``size`` vectors seen per class (a ring per class), for a nearest-neighbour
-    search among real samples of the same class across batches (the mode-seeking terms).
+    search among real samples of the same class across batches (the mode-seeking terms). The
+    models store training batches only.
 
     Its buffers are not saved in checkpoints: a resumed run refills them within a few batches,
     and a checkpoint keeps the paper's parameters only."""

@@ -88,7 +88,8 @@ class CVAE(MultimodalVAE):
             torch.zeros(len(labels), self.latent_dim, device=traj.device), "traj", batch
         )
         if self.mode_bank:
-            self.bank.store(traj, labels)
+            if self.training:  # validation never changes what training aims at
+                self.bank.store(traj, labels)
             nearest = self.bank.nearest_distance(decoded, labels)
         else:
             distance = (decoded[:, None, :] - traj[None, :, :]).pow(2).sum(-1)

@@ -220,7 +220,8 @@ class MUSE(MultimodalVAE):
                 continue
             decoded = self.top_decoders[m](label_mean)
             if self.mode_bank:
-                self.banks[m].store(codes[m], labels)
+                if self.training:  # validation never changes what training aims at
+                    self.banks[m].store(codes[m], labels)
                 nearest = self.banks[m].nearest_distance(decoded, labels).mean()
             else:
                 distance = (decoded[:, None, :] - codes[m][None, :, :]).pow(2).sum(-1)
