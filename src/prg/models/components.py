@@ -151,6 +151,13 @@ class ImageDecoder(nn.Module):
         return self.deconv(self.fc(z).view(-1, 256, 3, 3))
 
 
+def nearest_same_class(queries: torch.Tensor, values: torch.Tensor, labels: torch.Tensor):
+    """Per query i, the squared distance to the nearest row j of ``values`` (same batch) with
+    ``labels[j] == labels[i]`` (the batch-only candidates of the mode-seeking terms)."""
+    distance = (queries[:, None, :] - values[None, :, :]).pow(2).sum(-1)
+    return distance.masked_fill(labels[:, None] != labels[None, :], float("inf")).amin(1)
+
+
 class ClassRing(nn.Module):
     """The last ``size`` vectors seen per class (a ring per class), for a nearest-neighbour
     search among real samples of the same class across batches (the mode-seeking terms). The

@@ -18,7 +18,13 @@ import torch.nn.functional as F
 
 from prg.alphabet import NUM_CLASSES
 from prg.models.base import Gaussian, ImportancePath, Inputs, MultimodalVAE
-from prg.models.components import TRAJ_DIM, ClassRing, TrajectoryDecoder, TrajectoryEncoder
+from prg.models.components import (
+    TRAJ_DIM,
+    ClassRing,
+    TrajectoryDecoder,
+    TrajectoryEncoder,
+    nearest_same_class,
+)
 from prg.models.fusion import kl_standard_normal, reparameterise
 
 
@@ -92,9 +98,7 @@ class CVAE(MultimodalVAE):
                 self.bank.store(traj, labels)
             nearest = self.bank.nearest_distance(decoded, labels)
         else:
-            distance = (decoded[:, None, :] - traj[None, :, :]).pow(2).sum(-1)
-            same_class = labels[:, None] == labels[None, :]
-            nearest = distance.masked_fill(~same_class, float("inf")).amin(1)
+            nearest = nearest_same_class(decoded, traj, labels)
         return (nearest / (2 * self.likelihoods.traj_std**2)).mean()
 
     likelihood_cells: ClassVar[list[tuple[str, tuple[str, ...]]]] = [("traj", ("label",))]

@@ -40,7 +40,7 @@ from torch import nn
 
 from prg.alphabet import NUM_CLASSES
 from prg.models.base import Gaussian, ImportancePath, Inputs, MultimodalVAE
-from prg.models.components import ClassRing, GaussianHead, mlp
+from prg.models.components import ClassRing, GaussianHead, mlp, nearest_same_class
 from prg.models.fusion import kl_standard_normal, product_of_experts, reparameterise, symmetric_kl
 from prg.models.modalities import MODALITIES
 
@@ -213,7 +213,6 @@ class MUSE(MultimodalVAE):
         toward the average; a bank of many offers a real choice, so the target is the style
         nearest to what the decoder already gives, and the decoder bends least."""
         label_mean = self._fuse({"label": experts["label"]}).mu
-        same_class = labels[:, None] == labels[None, :]
         total = 0.0
         for m in self.modalities:
             if m == "label":
@@ -224,8 +223,7 @@ class MUSE(MultimodalVAE):
                     self.banks[m].store(codes[m], labels)
                 nearest = self.banks[m].nearest_distance(decoded, labels).mean()
             else:
-                distance = (decoded[:, None, :] - codes[m][None, :, :]).pow(2).sum(-1)
-                nearest = distance.masked_fill(~same_class, float("inf")).amin(1).mean()
+                nearest = nearest_same_class(decoded, codes[m], labels).mean()
             terms[f"mode_{m}"] = nearest
             total = total + self.gammas[m] * nearest
         return total
