@@ -627,6 +627,7 @@ def coherence_markdown(evaluate: dict) -> str:
             for title, kind in variants(f)
         ],
     )
+    shifted = _shifted_images_markdown(evaluate)
     return "\n".join(
         [
             "**Cross-modal coherence** (the generated modality classified as the given label; "
@@ -642,6 +643,7 @@ def coherence_markdown(evaluate: dict) -> str:
             "",
             robustness,
             "",
+            *shifted,
             "**Smoothness**: roughness ratio of the letters decoded from labels or images "
             "(posterior mean): their median roughness over the test letters' median roughness "
             f"({_number(evaluate, TEST_ROUGHNESS, '.3f')}); 1 is as smooth as the data, the "
@@ -650,6 +652,46 @@ def coherence_markdown(evaluate: dict) -> str:
             roughness,
         ]
     )
+
+
+def _shifted_images_markdown(evaluate: dict) -> list[str]:
+    """Coherence from test images moved off-centre (lines, then a blank one; none for a snapshot
+    made before the evaluation had it)."""
+    shifts = sorted(
+        {
+            int(k.rsplit("_shift", 1)[1])
+            for k in evaluate
+            if "/coherence_folded_T_given_I_shift" in k
+        }
+    )
+    if not shifts:
+        return []
+    cells = [(c, s) for c in ("T_given_I", "S_given_I") for s in shifts]
+    table = _table(
+        [
+            "model",
+            *(
+                f"{c.replace('_given_', ' from ')}, " + (f"<= {s} px" if s else "as is")
+                for c, s in cells
+            ),
+        ],
+        [
+            [
+                FAMILIES[f],
+                *(_number(evaluate, f"{f}/coherence_folded_{c}_shift{s}", ".0%") for c, s in cells),
+            ]
+            for f in FAMILIES
+            if f"{f}/coherence_folded_T_given_I_shift0" in evaluate
+        ],
+    )
+    return [
+        "**Images moved off-centre**: coherence (folded) of what a model generates from a test "
+        "image alone, as rendered and moved by a random offset of up to 1 or 2 pixels per axis "
+        "(`robustness.md`):",
+        "",
+        table,
+        "",
+    ]
 
 
 def demo_markdown(demo: Path = DEMO) -> str:

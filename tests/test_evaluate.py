@@ -20,6 +20,7 @@ from prg.evaluation.likelihood import MODEL_STD_SUFFIX, PAPER_TABLE1, TABLE1_CEL
 from prg.evaluation.run import load_test_data, subset
 from prg.evaluation.smoothness import median_roughness
 from prg.models.checkpoint import load_model
+from prg.models.components import shift_images
 from prg.models.likelihoods import Likelihoods
 from prg.tracking import sqlite_uri
 from tests.conftest import run_cli
@@ -119,6 +120,22 @@ def test_reports_tables_figures_and_mlflow(trained_root, small_dataset):
     robustness = (reports / "robustness.md").read_text()
     assert "{S,I}" in robustness and "{T,S,I}*" in robustness
     assert "# Missing-modality robustness" in robustness
+
+    # images moved off-centre: the models that take an image alone, each cross-modal target,
+    # unmoved and at each configured shift; the unmoved rows agree with the coherence cells
+    shifted = {(r["model"], r["target"], r["shift"]) for r in result.shifted_images}
+    shifts = (0, *cfg.coherence.image_shifts)
+    assert shifted == {("avae_ti", "traj", s) for s in shifts} | {
+        ("muse", t, s) for t in ("traj", "label") for s in shifts
+    }
+    mean = {
+        (r["model"], r["target"], r["given"]): r for r in result.coherence if r["kind"] == "mean"
+    }
+    for row in result.shifted_images:
+        if row["shift"] == 0:
+            same = mean[(row["model"], row["target"], "I")]
+            assert row["coherence_folded"] == pytest.approx(same["coherence_folded"], abs=1e-6)
+    assert "## Images moved off-centre" in robustness and "moved <= 2 px" in robustness
     coherence_md = (reports / "coherence.md").read_text()
     assert "test accuracy" in coherence_md and "mean, folded" in coherence_md
     assert "## Smoothness of decoded letters" in coherence_md
@@ -163,6 +180,14 @@ def test_reports_tables_figures_and_mlflow(trained_root, small_dataset):
     ti_i = models["avae_ti"].generate({"image": test["image"]}, "traj")[0]
     assert metrics["avae_ti/roughness_ratio_T_given_I"] == pytest.approx(
         median_roughness(ti_i.numpy()) / reference, rel=1e-3
+    )
+    # the label MUSE reads from test images moved by up to 2 pixels, recomputed by hand
+    torch.manual_seed(cfg.seed)  # generate() draws from the global generator
+    generator = torch.Generator().manual_seed(cfg.seed)
+    moved = shift_images(test["image"], 2, generator)
+    read = models["muse"].generate({"image": moved}, "label")[0].argmax(-1).numpy()
+    assert metrics["muse/coherence_S_given_I_shift2"] == pytest.approx(
+        np.mean(read == labels), abs=1e-3
     )
     ratio_keys = {k for k in metrics if "/roughness_ratio_" in k}
     assert ratio_keys == {
@@ -246,6 +271,7 @@ BAD = [
     (["likelihood.cells=[logp_X]"], "likelihood.cells"),
     (["parts=[plots]"], "parts"),
     (["coherence.temperatures.mean=-1"], "temperatures.mean"),
+    (["coherence.image_shifts=[1,-2]"], "coherence.image_shifts[1] must be an integer in [0, 8]"),
     (["likelihood.traj_std=0"], "likelihood.traj_std must be a finite number in (0, 100] or null"),
 ]
 
@@ -312,6 +338,9 @@ def test_settings_of_the_shipped_config_and_of_the_library_alone():
     # the library names the field; the command layer adds the node's path
     with pytest.raises(SettingsError, match=r"^k_marginal must be an integer in \[1, "):
         LikelihoodSettings(k_marginal=0)
+    assert settings.coherence.image_shifts == (1, 2) == CoherenceSettings().image_shifts
+    with pytest.raises(SettingsError, match=r"^image_shifts\[0\] must be an integer in \[0, 8\]"):
+        CoherenceSettings(image_shifts=[9])
     with pytest.raises(SettingsError, match=r"^temperatures\.mean must be a finite number"):
         CoherenceSettings(temperatures={"mean": float("nan")})
     with pytest.raises(SettingsError, match=r"^n_test must be an integer >= 1 or null"):

@@ -28,6 +28,7 @@ from prg.models.components import (
     LabelEncoder,
     TrajectoryDecoder,
     TrajectoryEncoder,
+    shift_images,
 )
 from prg.models.cvae import CVAE
 from prg.models.fusion import product_of_experts
@@ -742,6 +743,77 @@ def test_zero_init_trajectory_starts_every_trajectory_decoder_flat():
         default = PRGModule(FAMILIES[family][0], ADAM)
         other = next(m for m in default.model.modules() if isinstance(m, TrajectoryDecoder))
         assert torch.count_nonzero(other(z)) > 0, family
+
+
+def test_shift_images_moves_each_image_by_its_own_offset_within_the_bound():
+    images = torch.zeros(300, 1, 28, 28)
+    images[:, 0, 14, 14] = 1.0
+    torch.manual_seed(0)
+    shifted = shift_images(images, 2)
+    assert shifted.shape == images.shape
+    assert torch.equal(shifted.sum((1, 2, 3)), torch.ones(300))  # the ink is moved, not lost
+    rows, cols = shifted[:, 0].nonzero()[:, 1], shifted[:, 0].nonzero()[:, 2]
+    offsets = set(zip((rows - 14).tolist(), (cols - 14).tolist()))
+    assert offsets == {(dy, dx) for dy in range(-2, 3) for dx in range(-2, 3)}
+    assert shift_images(images, 0) is images
+
+
+def test_shift_images_fills_the_uncovered_border_with_background():
+    images = torch.ones(50, 1, 28, 28)
+    torch.manual_seed(1)
+    shifted = shift_images(images, 3)
+    uncovered = (shifted == 0).sum((1, 2, 3))
+    assert uncovered.max() > 0 and uncovered.max() <= 28 * 28 - 25 * 25
+    assert set(shifted.unique().tolist()) <= {0.0, 1.0}
+
+
+@pytest.mark.parametrize("family", ["avae_ti", "muse"])
+def test_elbo_encodes_the_given_inputs_and_reconstructs_the_batch(family):
+    model = make_model(family)
+    modalities = FAMILIES[family][1]
+    batch = make_batch(6, seed=2, modalities=modalities)
+    inputs = {**batch, "image": make_batch(6, seed=3)["image"]}
+
+    def terms(*args):
+        torch.manual_seed(4)
+        with torch.no_grad():
+            return model.elbo(*args)
+
+    denoising, on_inputs, on_batch = terms(batch, inputs), terms(inputs), terms(batch)
+    _close(denoising["kl_image"], on_inputs["kl_image"], "the encoder sees the inputs")
+    assert not torch.isclose(denoising["kl_image"], on_batch["kl_image"])
+    assert not torch.isclose(denoising["rec_image"], on_inputs["rec_image"])  # other targets
+    _close(denoising["rec_traj"], on_inputs["rec_traj"], "other modalities are unchanged")
+
+
+def test_prg_module_shifts_the_encoders_images_in_training_steps_only(monkeypatch):
+    module = PRGModule(FAMILIES["muse"][0], ADAM, image_shift=2)
+    seen = []
+    elbo = module.model.elbo
+    monkeypatch.setattr(
+        module.model, "elbo", lambda batch, inputs=None: seen.append(inputs) or elbo(batch, inputs)
+    )
+    monkeypatch.setattr(module, "log", lambda *a, **k: None)
+    batch = make_batch(8, seed=6)
+    original = batch["image"].clone()
+    module.training_step(batch, 0)
+    module.validation_step(batch, 0)
+    assert torch.equal(batch["image"], original)  # the targets stay the unshifted images
+    assert not torch.equal(seen[0]["image"], original)
+    assert torch.equal(seen[0]["traj"], batch["traj"])
+    assert seen[1] is None  # validation scores the images as they are
+    unshifted = PRGModule(FAMILIES["muse"][0], ADAM)
+    monkeypatch.setattr(
+        unshifted.model, "elbo", lambda b, inputs=None: seen.append(inputs) or elbo(b)
+    )
+    unshifted.training_step(batch, 0)
+    assert seen[2] is None
+
+
+@pytest.mark.parametrize("bad", [-1, 1.5, True, "2"])
+def test_prg_module_refuses_a_bad_image_shift(bad):
+    with pytest.raises(UsageError, match="image_shift must be a whole number of pixels"):
+        PRGModule(FAMILIES["muse"][0], ADAM, image_shift=bad)
 
 
 @pytest.mark.parametrize("family", list(FAMILIES))

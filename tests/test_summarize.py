@@ -271,3 +271,21 @@ def test_muse_imputed_rows_follow_its_posterior_mean_rows(tmp_path):
     assert _row(text, COHERENCE, "PRG_MUSE(T,S,I), imputed")[0] == "90% / 94%"
     assert _row(text, SMOOTHNESS, "PRG_MUSE(T,S,I), imputed") == ["1.10", "-"]
     assert "PRG_AVAE(T,S), imputed" not in text
+
+
+def test_images_moved_off_centre_show_each_shift_for_the_models_that_read_images(tmp_path):
+    values = {
+        f"{f}/coherence_folded_{c}_shift{s}": v
+        for f, c, v0 in (
+            ("muse", "T_given_I", 0.9),
+            ("muse", "S_given_I", 0.8),
+            ("avae_ti", "T_given_I", 0.7),
+        )
+        for s, v in ((0, v0), (1, v0 - 0.1), (2, v0 - 0.2))
+    }
+    text = _demo_with(tmp_path, values)
+    title = "**Images moved off-centre**"
+    assert _row(text, title, "PRG_MUSE(T,S,I)") == ["90%", "80%", "70%", "80%", "70%", "60%"]
+    assert _row(text, title, "PRG_AVAE(T,I)") == ["70%", "60%", "50%", "-", "-", "-"]
+    assert "PRG_CVAE(T,S)" not in text.split(title)[1].split("**Smoothness**")[0]
+    assert title not in _demo_with(tmp_path / "old", {})  # a snapshot made before it: no table

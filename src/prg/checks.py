@@ -131,6 +131,7 @@ LIKELIHOOD_RANGES: dict[str, Range] = {  # prg.evaluation.settings.LikelihoodSet
     "chunk_rows": count(1, 10_000_000),  # bounds the memory
     "traj_std": Range(0, 100, low_open=True, optional=True),
 }
+IMAGE_SHIFT = count(0, 8)  # whole pixels of a 28 x 28 image
 COHERENCE_RANGES: dict[str, Range] = {  # prg.evaluation.settings.CoherenceSettings
     "impute_steps": count(0, 1000),
     "batch_size": count(1, 1_000_000),
@@ -234,6 +235,7 @@ RANGES: dict[str, Range] = {
     "model.module.scheduler.max_lr": positive(10),
     "model.module.scheduler.pct_start": FRACTION,
     "model.module.top_warmup_epochs": count(0),
+    "model.module.image_shift": IMAGE_SHIFT,
     "trainer.max_epochs": count(1, also=(-1,)),
     "trainer.max_steps": count(1, also=(-1,)),
     "trainer.limit_train_batches": positive(),  # a fraction (<= 1.0) or a number of batches
@@ -257,6 +259,7 @@ RANGES: dict[str, Range] = {
     **_under("likelihood", LIKELIHOOD_RANGES),
     **_under("coherence", COHERENCE_RANGES),
     "coherence.temperatures.*": TEMPERATURE,
+    "coherence.image_shifts": IMAGE_SHIFT,
     **_under("classifier", CLASSIFIER_RANGES),
     # prg-write (and prg-dictaphone, prg-simulate, which run it)
     "layout.*": positive(100),  # cm, or fractions of the letter height

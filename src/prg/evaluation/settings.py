@@ -15,6 +15,7 @@ from prg.checks import (
     CLASSIFIER_RANGES,
     COHERENCE_RANGES,
     EVALUATION_RANGES,
+    IMAGE_SHIFT,
     LIKELIHOOD_RANGES,
     TEMPERATURE,
     require_number,
@@ -80,11 +81,15 @@ class CoherenceSettings:
     impute_steps : families that impute (MUSE) are also scored as the ``imputed`` kind, the
         posterior mean after this many rounds of imputing the missing modalities (0: not).
     batch_size : test samples generated at once.
+    image_shifts : models that take an image alone are also scored on the test images moved
+        off-centre by up to each of these many pixels per axis (a seeded random offset per
+        image; the robustness report's second table); empty: not.
     """
 
     temperatures: Mapping[str, float] = field(default_factory=lambda: {"mean": 0.0, "sampled": 1.0})
     impute_steps: int = 0
     batch_size: int = 512
+    image_shifts: tuple[int, ...] = (1, 2)
 
     def __post_init__(self) -> None:
         spec = TEMPERATURE
@@ -94,7 +99,10 @@ class CoherenceSettings:
             # "temperatures:" keeps the message users know: "coherence.temperatures: 'imputed' ..."
             raise SettingsError("temperatures:", f"{IMPUTED!r} names the imputed kind; rename it")
         check_ranges(self, COHERENCE_RANGES)
+        for i, shift in enumerate(self.image_shifts):
+            require_number(shift, f"image_shifts[{i}]", IMAGE_SHIFT)
         object.__setattr__(self, "temperatures", dict(self.temperatures))
+        object.__setattr__(self, "image_shifts", tuple(self.image_shifts))
 
 
 @dataclass(frozen=True)

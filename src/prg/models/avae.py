@@ -58,8 +58,9 @@ class AVAE(MultimodalVAE):
     def decode(self, z: torch.Tensor, modality: str, inputs: Inputs | None = None) -> torch.Tensor:
         return self.decoders[modality](z)
 
-    def elbo(self, batch: Inputs) -> dict[str, torch.Tensor]:
-        posts = {m: Gaussian(*self.encoders[m](batch[m])) for m in self.modalities}
+    def elbo(self, batch: Inputs, inputs: Inputs | None = None) -> dict[str, torch.Tensor]:
+        inputs = batch if inputs is None else inputs
+        posts = {m: Gaussian(*self.encoders[m](inputs[m])) for m in self.modalities}
         eps = torch.randn_like(posts[self.modalities[0]].mu)
         terms: dict[str, torch.Tensor] = {}
         loss = 0.0

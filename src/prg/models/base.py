@@ -92,8 +92,11 @@ class MultimodalVAE(nn.Module, ABC):
         """Likelihood parameters of ``modality`` (``inputs`` carries a CVAE's condition)."""
 
     @abstractmethod
-    def elbo(self, batch: Inputs) -> dict[str, torch.Tensor]:
-        """Loss terms averaged over the batch; ``loss`` is the total to minimise."""
+    def elbo(self, batch: Inputs, inputs: Inputs | None = None) -> dict[str, torch.Tensor]:
+        """Loss terms averaged over the batch; ``loss`` is the total to minimise.
+
+        ``inputs``: what the encoders see where it differs from the reconstruction targets in
+        ``batch`` (denoising training, e.g. shifted images; default: ``batch`` itself)."""
 
     @abstractmethod
     def importance_path(self, target: str, x_target: torch.Tensor, given: Inputs) -> ImportancePath:

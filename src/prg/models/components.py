@@ -192,3 +192,23 @@ class ClassRing(nn.Module):
         its class has none yet)."""
         distance = (queries[:, None, :] - self.values[labels]).pow(2).sum(-1)
         return distance.masked_fill(~self.filled[labels], float("inf")).amin(1)
+
+
+def shift_images(
+    images: torch.Tensor, max_shift: int, generator: torch.Generator | None = None
+) -> torch.Tensor:
+    """Each image ``(n, c, h, w)`` moved by its own random whole-pixel offset in
+    ``[-max_shift, max_shift]`` along each axis, the uncovered border filled with background
+    (0); offsets from ``generator`` (default: torch's global one). Written here because
+    torchvision's ``RandomAffine`` draws one offset per call, not per sample, and the project
+    does not otherwise need torchvision."""
+    if max_shift <= 0:
+        return images
+    n, channels, height, width = images.shape
+    padded = nn.functional.pad(images, (max_shift,) * 4)
+    offsets = torch.randint(0, 2 * max_shift + 1, (2, n, 1), generator=generator).to(images.device)
+    rows = offsets[0] + torch.arange(height, device=images.device)  # (n, h)
+    cols = offsets[1] + torch.arange(width, device=images.device)  # (n, w)
+    index = torch.arange(n, device=images.device)[:, None, None, None]
+    channel = torch.arange(channels, device=images.device)[None, :, None, None]
+    return padded[index, channel, rows[:, None, :, None], cols[:, None, None, :]]

@@ -67,8 +67,9 @@ class CVAE(MultimodalVAE):
             raise ValueError("the CVAE decodes trajectories only, given the label in `inputs`")
         return self.decoder(torch.cat([z, self._onehot(inputs["label"])], -1))
 
-    def elbo(self, batch: Inputs) -> dict[str, torch.Tensor]:
-        posterior = self.encode({"traj": batch["traj"], "label": batch["label"]})
+    def elbo(self, batch: Inputs, inputs: Inputs | None = None) -> dict[str, torch.Tensor]:
+        inputs = batch if inputs is None else inputs
+        posterior = self.encode({"traj": inputs["traj"], "label": batch["label"]})
         z = reparameterise(posterior.mu, posterior.logvar)
         rec = -self.likelihoods.log_prob("traj", self.decode(z, "traj", batch), batch["traj"])
         kl = kl_standard_normal(posterior.mu, posterior.logvar)

@@ -17,7 +17,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from prg.errors import UsageError
 from prg.models.base import MultimodalVAE
-from prg.models.components import TrajectoryDecoder
+from prg.models.components import TrajectoryDecoder, shift_images
 
 
 def _plain(cfg: Any) -> dict[str, Any]:
@@ -45,6 +45,11 @@ class PRGModule(L.LightningModule):
         Start every trajectory decoder's output layer at zero
         (:meth:`~prg.models.components.TrajectoryDecoder.zero_output_layer`): smooth letters
         from the first steps instead of a white-noise pattern that training removes slowly.
+    image_shift : int
+        Denoising training of image encoders: in training steps each image the encoders see is
+        moved by a random whole-pixel offset of up to this many pixels per axis
+        (:func:`~prg.models.components.shift_images`), while the reconstruction targets stay the
+        unshifted images (0: off). Decoders and validation are unchanged.
     """
 
     def __init__(
@@ -54,6 +59,7 @@ class PRGModule(L.LightningModule):
         scheduler: dict[str, Any] | None = None,
         top_warmup_epochs: float = 0,
         zero_init_trajectory: bool = False,
+        image_shift: int = 0,
     ):
         super().__init__()
         model, optimizer = _plain(model), _plain(optimizer)  # checkpoints hold plain containers
@@ -65,6 +71,7 @@ class PRGModule(L.LightningModule):
                 "scheduler": scheduler,
                 "top_warmup_epochs": top_warmup_epochs,
                 "zero_init_trajectory": zero_init_trajectory,
+                "image_shift": image_shift,
             }
         )
         self.model: MultimodalVAE = instantiate(model, _convert_="all")
@@ -78,6 +85,10 @@ class PRGModule(L.LightningModule):
             isinstance(top_warmup_epochs, int | float) and top_warmup_epochs >= 0
         ):
             raise UsageError(f"top_warmup_epochs must be a number >= 0, got {top_warmup_epochs!r}")
+        if isinstance(image_shift, bool) or not (isinstance(image_shift, int) and image_shift >= 0):
+            raise UsageError(
+                f"image_shift must be a whole number of pixels >= 0, got {image_shift!r}"
+            )
 
     @property
     def family(self) -> str:
@@ -110,10 +121,15 @@ class PRGModule(L.LightningModule):
             steps = warmup * max(1, int(self.trainer.num_training_batches))
             self.model.top_scale = min(1.0, (self.global_step + 1) / steps) if warmup else 1.0
 
-    def _step(self, batch: dict[str, torch.Tensor], split: str) -> torch.Tensor:
+    def _step(
+        self,
+        batch: dict[str, torch.Tensor],
+        split: str,
+        inputs: dict[str, torch.Tensor] | None = None,
+    ) -> torch.Tensor:
         # Terms are summed here and logged once per epoch (_log_epoch): Lightning's per-call
         # logging cost about 10 % of a small model's step (benchmarks/bench_train.py).
-        terms = self.model.elbo(batch)
+        terms = self.model.elbo(batch, inputs)
         size = len(next(iter(batch.values())))
         sums = self._sums.setdefault(split, {})
         for key, value in terms.items():
@@ -146,6 +162,10 @@ class PRGModule(L.LightningModule):
             self.model.top_scale = checkpoint["top_scale"]
 
     def training_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> torch.Tensor:
+        shift = self.hparams.get("image_shift", 0)  # absent from checkpoints saved before it
+        if shift and "image" in batch:
+            inputs = {**batch, "image": shift_images(batch["image"], shift)}
+            return self._step(batch, "train", inputs)
         return self._step(batch, "train")
 
     def validation_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> None:

@@ -162,12 +162,13 @@ class MUSE(MultimodalVAE):
         return posterior
 
     # ---- training -----------------------------------------------------------------------
-    def elbo(self, batch: Inputs) -> dict[str, torch.Tensor]:
+    def elbo(self, batch: Inputs, inputs: Inputs | None = None) -> dict[str, torch.Tensor]:
+        inputs = batch if inputs is None else inputs
         terms: dict[str, torch.Tensor] = {}
         loss = 0.0
         codes = {}
         for m in self.modalities:
-            mu, logvar = self.encoders[m](batch[m])
+            mu, logvar = self.encoders[m](inputs[m])
             z = reparameterise(mu, logvar)
             rec = -self.likelihoods.log_prob(m, self.decoders[m](z), batch[m]).mean()
             kl = kl_standard_normal(mu, logvar).mean()
