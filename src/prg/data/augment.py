@@ -260,6 +260,12 @@ def _stop_pool(pool: ProcessPoolExecutor) -> None:
         return
     for process in list((pool._processes or {}).values()):  # no public way before 3.14
         process.terminate()
+    # A task can be half-written into the pipe that only the dead workers read; the queue's
+    # feeder thread then blocks for ever and shutdown waits on it (CPython gh-94777, fixed in
+    # 3.12). Closing our copy of the read end makes that write fail, so the feeder ends.
+    call_queue = getattr(pool, "_call_queue", None)
+    if call_queue is not None:
+        call_queue._reader.close()
     pool.shutdown(wait=True, cancel_futures=True)
 
 
