@@ -13,6 +13,7 @@ import json
 import math
 import subprocess
 import sys
+import time
 from pathlib import Path
 from urllib.parse import parse_qs, urlparse
 
@@ -289,6 +290,36 @@ def draw(page, points) -> None:
     page.mouse.up()
 
 
+def draw_at_times(page, points, interval_s: float) -> None:
+    """One pen stroke through ``points`` (canvas CSS pixels, y down), an event every
+    ``interval_s`` seconds of the pen's own clock.
+
+    The events carry their times (Chrome DevTools ``Input.dispatchMouseEvent``'s ``timestamp``,
+    which becomes the event's ``timeStamp``), as a tablet's do, so the recorded times are the
+    pen's and not when a loaded test machine got round to sending each event."""
+    box = page.locator("#pad").bounding_box()
+    scale = box["width"] / page.evaluate("PRGCapture.config.canvas_width")
+    devtools = page.context.new_cdp_session(page)
+    start = time.time()
+    events = [("mousePressed", points[0], 0)]
+    events += [("mouseMoved", point, i) for i, point in enumerate(points) if i > 0]
+    events += [("mouseReleased", points[-1], len(points) - 1)]
+    for kind, (x, y), i in events:
+        devtools.send(
+            "Input.dispatchMouseEvent",
+            {
+                "type": kind,
+                "x": box["x"] + x * scale,
+                "y": box["y"] + y * scale,
+                "button": "left",
+                "buttons": 0 if kind == "mouseReleased" else 1,
+                "clickCount": 1,
+                "timestamp": start + i * interval_s,
+            },
+        )
+    devtools.detach()
+
+
 def loops(n: int = 36) -> list[tuple[float, float]]:
     """A loopy word-like path on the canvas (CSS pixels), 70 px high."""
     return [
@@ -340,26 +371,19 @@ def test_captured_human_strokes_fit_a_dmp_that_starts_and_ends_moving(page, tmp_
     )
     page.goto((folder / "capture" / "index.html").as_uri() + "?writer=w7")
     page.click("#begin")
-    box = page.locator("#pad").bounding_box()
-    scale = box["width"] / page.evaluate("PRGCapture.config.canvas_width")
     with page.expect_download() as download:
         for k in range(2):
-            # a pen already moving when it touches down: fast straight into the loops, at about
-            # 100 Hz (a real writer's tablet rate), one event per 10 ms
-            stroke = [(40 + 6 * i, 150) for i in range(6)] + loops(60)[2:]
-            (x, y), *rest = stroke
-            page.mouse.move(box["x"] + x * scale, box["y"] + y * scale)
-            page.mouse.down()
-            for x, y in rest:
-                page.wait_for_timeout(10)
-                page.mouse.move(box["x"] + x * scale, box["y"] + y * scale + k)
-            page.mouse.up()
+            # a pen already moving when it touches down: fast straight into the loops, at 100 Hz
+            # (a real writer's tablet rate)
+            entry = [(40 + 6 * i, 150) for i in range(6)]
+            draw_at_times(page, [(x, y + k) for x, y in entry + loops(60)[2:]], interval_s=0.010)
             page.click("#next")
     doc = json.loads(Path(download.value.path()).read_text())
     for sample in doc["samples"]:
         (stroke,) = sample["strokes"]
         raw = np.array([p[:2] for p in stroke])
         seconds = np.array([p[2] for p in stroke]) / 1000.0
+        assert np.allclose(np.diff(seconds), 0.010, atol=2e-4)  # the pen's clock, recorded
         uniform, duration = uniform_in_time(raw, seconds, n_samples=4 * len(raw))
         size = np.ptp(uniform, axis=0).max()
         errors = {}
