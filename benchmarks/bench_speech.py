@@ -17,7 +17,9 @@ Each utterance is recognised with each configuration:
 - ``whisper+lexicon``: the lexicon (= ``WORDS``) as hotwords, transcript snapped to the nearest
   lexicon word;
 - ``whisper+rescore``: the lexicon word of highest exact probability under Whisper's decoder
-  (short encoder window, best-bound pruning);
+  (short encoder window, best-bound pruning), summed over the audio and the audio slowed down
+  1.1x (the default ``slowdown``);
+- ``whisper+rescore 1 view``: the same on the audio alone (``slowdown=1``);
 - ``whisper-base`` and ``whisper-base+rescore``: the same with whisper base (multilingual), when
   ``--whisper-base`` (default: the model assembled by ``prg-speech-models base``) is available;
   otherwise listed as not measured, with the reason;
@@ -35,7 +37,10 @@ word's length (an utterance with no usable transcript counts as LER 1). Ratios: 
 median latency of each configuration over the reference's, in the same condition of the same run.
 
 Usage: ``python benchmarks/bench_speech.py [--clean en-us:160 ...] [--hard en-029+m2:170 ...]
-[--snr 15] [--limit N]``. Prints a table and writes ``benchmarks/results/bench_speech.json``.
+[--snr 15] [--limit N] [--words ball,car,...] [--only whisper+rescore ...] [--out FILE]``.
+Prints a table and writes ``benchmarks/results/bench_speech.json`` (or ``--out``). ``--words``
+replaces the word list (and lexicon), ``--only`` runs only the named configurations besides the
+reference: with other voices, they try the recogniser on voices and words it was not tuned on.
 """
 
 from __future__ import annotations
@@ -82,6 +87,7 @@ def configurations(
         "whisper": SpeechSettings(),
         "whisper+lexicon": SpeechSettings(lexicon=lexicon),
         "whisper+rescore": SpeechSettings(lexicon=lexicon, rescore=True),
+        "whisper+rescore 1 view": SpeechSettings(lexicon=lexicon, rescore=True, slowdown=1),
     }
     if whisper_base is not None:
         configs["whisper-base"] = SpeechSettings(model=whisper_base)
@@ -167,9 +173,15 @@ def main() -> None:
     parser.add_argument("--limit", type=int, default=None, help="only the first N words")
     parser.add_argument("--wav2vec2-model", default=DEFAULT_WAV2VEC2)
     parser.add_argument("--whisper-base", default="base", help="whisper base model (folder)")
+    parser.add_argument("--words", help="comma-separated words instead of the built-in 48")
+    parser.add_argument("--only", nargs="+", help="configurations to run besides the reference")
+    parser.add_argument("--out", type=Path, default=RESULTS / "bench_speech.json")
     args = parser.parse_args()
 
-    words = WORDS[: args.limit] if args.limit else WORDS
+    words = tuple(w.strip() for w in args.words.split(",") if w.strip()) if args.words else WORDS
+    words = words[: args.limit] if args.limit else words
+    if not words:
+        parser.error("--words: expected comma-separated words, got none")
     lexicon = tuple(words)
     not_measured: dict[str, str] = {}
     wav2vec2, base = args.wav2vec2_model, args.whisper_base
@@ -178,6 +190,11 @@ def main() -> None:
     if not available(lambda: get_recogniser("whisper", base), "whisper-base", not_measured):
         base = None
     configs = configurations(lexicon, wav2vec2, base)
+    if args.only:
+        unknown = sorted(set(args.only) - set(configs))
+        if unknown:
+            parser.error(f"--only: unknown {unknown}; accepted are {', '.join(configs)}")
+        configs = {n: p for n, p in configs.items() if n == REFERENCE or n in args.only}
     conditions = {
         "clean": (args.clean, None),
         "hard": (args.hard, args.snr),
@@ -269,6 +286,7 @@ def main() -> None:
                     "model": p.model,
                     "lexicon": p.lexicon is not None,
                     "rescore": p.rescore,
+                    "slowdown": p.slowdown,
                 }
                 for name, p in configs.items()
             },
@@ -278,8 +296,8 @@ def main() -> None:
         "not_measured": not_measured,
         "utterances": records,
     }
-    RESULTS.mkdir(exist_ok=True)
-    out = RESULTS / "bench_speech.json"
+    out = args.out
+    out.parent.mkdir(parents=True, exist_ok=True)
     write_json(out, report)
     print(f"\nwrote {out}")
 

@@ -254,6 +254,8 @@ def test_params_store_the_lexicon_as_a_tuple_without_duplicates():
         ({"beam_size": 0}, "beam_size must be an integer >= 1"),
         ({"prior_weight": 1.5}, "prior_weight must be between 0 and 1"),
         ({"prior_weight": math.nan}, "prior_weight must be between 0 and 1"),
+        ({"slowdown": 0.9}, "slowdown must be between 1 and 2"),
+        ({"slowdown": math.nan}, "slowdown must be between 1 and 2"),
     ],
 )
 def test_bad_params_are_usage_errors(kwargs, fragment):
@@ -466,6 +468,25 @@ def test_whisper_rescoring_prior_is_the_score_on_silence(speech, whisper):
     weighted = whisper.score(audio, [words[1]], SpeechSettings(lexicon=words, prior_weight=0.5))
     assert plain[0] <= 0 and silence[0] <= 0
     np.testing.assert_allclose(weighted, plain - 0.5 * silence, atol=1e-4)
+
+
+def test_whisper_rescoring_sums_the_audio_and_its_slowed_copy(speech, whisper):
+    """With a slowdown, a word's score is its score on the audio plus its score on the audio
+    resampled that much slower (scored alone, slowdown 1), and the slowed copy is that much
+    longer."""
+    from prg.pipeline.speech.backends.whisper import views
+
+    audio = load_audio(speech["jump"])
+    words = LEXICON[:4]
+    one = SpeechSettings(lexicon=words, prior_weight=0, slowdown=1)
+    original, slowed = views(audio, 1.25)
+    assert original is audio and len(slowed) == pytest.approx(1.25 * len(audio), abs=2)
+    both = whisper.score(
+        audio, [words[2]], SpeechSettings(lexicon=words, prior_weight=0, slowdown=1.25)
+    )
+    alone = whisper.score(audio, [words[2]], one) + whisper.score(slowed, [words[2]], one)
+    np.testing.assert_allclose(both, alone, atol=1e-4)
+    assert views(audio, 1) == [audio]
 
 
 @pytest.mark.parametrize("variant", ["hello_44k_stereo", "hello_8k"])

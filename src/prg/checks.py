@@ -272,6 +272,7 @@ RANGES: dict[str, Range] = {
     "speech.min_rms_dbfs": Range(-200, 0),
     "speech.beam_size": count(1, 64),
     "speech.prior_weight": Range(0, 1),
+    "speech.slowdown": Range(1, 2),
     # prg-dictaphone
     "speed": Range(10, 1000),  # espeak-ng words per minute
     # prg-simulate

@@ -35,6 +35,9 @@ class SpeechSettings:
         Whisper rescoring: subtract this times each word's log-probability on silence from its
         log-probability on the audio (0: the plain probability; 1: pointwise mutual
         information). Takes back the decoder's preference for words it expects anyway.
+    slowdown : float
+        Whisper rescoring: also score the audio slowed down by this factor (1 to 2; 1: the
+        audio alone) and sum the two log-probabilities; about twice the latency.
     case : {"lower", "upper", "title"}
         Case of the written word.
     max_seconds : float
@@ -52,6 +55,7 @@ class SpeechSettings:
     lexicon: tuple[str, ...] | None = None
     rescore: bool = False
     prior_weight: float = 0.4
+    slowdown: float = 1.1
     case: str = "lower"
     max_seconds: float = 30.0
     min_rms_dbfs: float = -50.0
@@ -69,6 +73,8 @@ class SpeechSettings:
             raise UsageError(f"max_seconds must be > 0 and finite, got {self.max_seconds}")
         if not 0 <= self.prior_weight <= 1:
             raise UsageError(f"prior_weight must be between 0 and 1, got {self.prior_weight}")
+        if not 1 <= self.slowdown <= 2:
+            raise UsageError(f"slowdown must be between 1 and 2, got {self.slowdown}")
         if not (isinstance(self.beam_size, int) and self.beam_size >= 1):
             raise UsageError(f"beam_size must be an integer >= 1, got {self.beam_size!r}")
         if self.lexicon is not None:

@@ -85,7 +85,7 @@ class WhisperRecogniser:
         # per (lexicon, language): its words' written variants as tokens, and their scores on
         # silence; a robot's lexicon is fixed, so neither is recomputed per utterance
         self._variants: dict[tuple[tuple[str, ...], str], list[list[tuple[int, ...]]]] = {}
-        self._silence: dict[tuple[tuple[str, ...], str], np.ndarray] = {}
+        self._silence: dict[tuple[tuple[str, ...], str, float], np.ndarray] = {}
 
     def _language(self, language: str) -> str:
         """The decoding language: ``language`` for multilingual models, else English."""
@@ -128,18 +128,21 @@ class WhisperRecogniser:
 
     def score(self, audio: np.ndarray, words: Sequence[str], params: SpeechSettings) -> np.ndarray:
         """``log P(word | audio) - prior_weight * log P(word | silence)`` for each word, where
-        ``log P(word | x) = log sum_v P(v <eot> | x)`` over the word's written variants ``v``.
+        ``log P(word | x) = log sum_v P(v <eot> | x)`` over the word's written variants ``v``,
+        summed over the views of ``x`` (:func:`views`: the audio, and the audio slowed down by
+        ``params.slowdown`` unless that is 1).
 
         The second term (pointwise mutual information when ``params.prior_weight`` is 1) takes
         back part of the decoder's language prior: on noisy or unfamiliar speech the plain
         probability drifts to words the decoder expects anyway ("hello", "music"). It is
-        computed once per lexicon (on one second of silence) and cached.
+        computed once per lexicon (on the views of one second of silence) and cached.
 
         Exact scores are computed best-bound first: a variant's probability is at most its
         first token's, so a word's score is bounded by the log-sum over its variants' distinct
-        first tokens (one decoder step for all words) minus its prior term. Words are scored in
-        bound order, in growing batches, until the best exact score reaches the next unscored
-        word's bound: the returned best word is the exact argmax. Words left unscored get NaN.
+        first tokens (one decoder step per view for all words) minus its prior term. Words are
+        scored in bound order, in growing batches, until the best exact score reaches the next
+        unscored word's bound: the returned best word is the exact argmax. Words left unscored
+        get NaN.
         """
         from scipy.special import logsumexp
 
@@ -148,10 +151,14 @@ class WhisperRecogniser:
         variants = self._lexicon_variants(tuple(words), params.language)
         prior = np.zeros(len(words))
         if params.prior_weight:
-            prior = params.prior_weight * self._silence_scores(tuple(words), params.language)
-        encoded = self._encode(audio)
-        first = self._forced(encoded, start, [()])[()][0]  # log P(first token)
-        bounds = np.array([logsumexp([first[t] for t in {v[0] for v in vs}]) for vs in variants])
+            prior = params.prior_weight * self._silence_scores(
+                tuple(words), params.language, params.slowdown
+            )
+        encoded = [self._encode(view) for view in views(audio, params.slowdown)]
+        bounds = np.zeros(len(words))
+        for one in encoded:
+            first = self._forced(one, start, [()])[()][0]  # log P(first token)
+            bounds += [logsumexp([first[t] for t in {v[0] for v in vs}]) for vs in variants]
         order = np.argsort(-(bounds - prior), kind="stable")
         scores = np.full(len(words), np.nan)
         done, size = 0, 2
@@ -165,13 +172,15 @@ class WhisperRecogniser:
                 break
         return scores
 
-    def _silence_scores(self, words: tuple[str, ...], language: str) -> np.ndarray:
-        """``log P(word | one second of silence)`` for every word, cached per lexicon."""
-        key = (words, language)
+    def _silence_scores(self, words: tuple[str, ...], language: str, slowdown: float):
+        """``log P(word | one second of silence)`` for every word, summed over the views of the
+        silence, cached per lexicon."""
+        key = (words, language, slowdown)
         if key not in self._silence:
             tok = self._tokenizer(language)
             start = [*tok.sot_sequence, tok.no_timestamps]
-            encoded = self._encode(np.zeros(SAMPLE_RATE, dtype=np.float32))
+            silence = np.zeros(SAMPLE_RATE, dtype=np.float32)
+            encoded = [self._encode(view) for view in views(silence, slowdown)]
             variants = self._lexicon_variants(words, language)
             self._silence[key] = self._exact(encoded, start, tok.eot, variants)
         return self._silence[key]
@@ -187,18 +196,21 @@ class WhisperRecogniser:
         """The encoder output for ``audio`` on the rescoring window (:func:`rescoring_window`)."""
         return np.asarray(self.whisper.encode(rescoring_window(self._features(audio))[None]))
 
-    def _exact(self, encoded, start: list[int], eot: int, variants: list[list[tuple]]):
-        """``log sum_v P(v <eot>)`` for each word given by its variants' token tuples."""
+    def _exact(self, encoded: list, start: list[int], eot: int, variants: list[list[tuple]]):
+        """``log sum_v P(v <eot>)`` for each word given by its variants' token tuples, summed
+        over the encoder outputs ``encoded`` (one per view)."""
         from scipy.special import logsumexp
 
-        steps = self._forced(encoded, start, {v for vs in variants for v in vs})
-        scores = np.empty(len(variants))
-        for i, vs in enumerate(variants):
-            values = []
-            for v in vs:
-                logp = next(lp for seq, lp in steps.items() if seq[: len(v)] == v)
-                values.append(sum(logp[k][t] for k, t in enumerate(v)) + logp[len(v)][eot])
-            scores[i] = logsumexp(values)
+        every = {v for vs in variants for v in vs}
+        scores = np.zeros(len(variants))
+        for one in encoded:
+            steps = self._forced(one, start, every)
+            for i, vs in enumerate(variants):
+                values = []
+                for v in vs:
+                    logp = next(lp for seq, lp in steps.items() if seq[: len(v)] == v)
+                    values.append(sum(logp[k][t] for k, t in enumerate(v)) + logp[len(v)][eot])
+                scores[i] += logsumexp(values)
         return scores
 
     def _features(self, audio: np.ndarray) -> np.ndarray:
@@ -266,6 +278,28 @@ class _StepLogProbabilities:
 
     def __getitem__(self, token: int) -> float:
         return float(self.logits[token]) - self.log_total
+
+
+def views(audio: np.ndarray, slowdown: float) -> list[np.ndarray]:
+    """What rescoring scores: ``audio``, and unless ``slowdown`` is 1 the same audio slowed
+    down by that factor (resampled by the nearest ratio with a denominator up to 100 and played
+    at the original rate, so also lower in pitch: speed perturbation, as in ASR training).
+
+    The two views' log-probabilities are summed. Measured with tiny.en on 552 espeak-ng words
+    (13 voices, 88 words, clean and with white noise at 15 dB; the README), the sum with a 1.1x
+    slower copy got 5 more right than the audio alone and none of the five sets fewer: fast
+    speech slowed down is nearer what the model was trained on, and the two views' errors
+    differ. Two encoder passes and two sets of decoder passes: about twice the latency.
+    """
+    from fractions import Fraction
+
+    from scipy.signal import resample_poly
+
+    if slowdown == 1:
+        return [audio]
+    ratio = Fraction(slowdown).limit_denominator(100)
+    slowed = resample_poly(audio, ratio.numerator, ratio.denominator).astype(np.float32)
+    return [audio, slowed]
 
 
 def rescoring_window(features: np.ndarray) -> np.ndarray:
