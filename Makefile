@@ -88,6 +88,14 @@ format: setup ## Format and fix with ruff
 	$(BIN)/ruff format src studies tests benchmarks
 	$(BIN)/ruff check --fix src studies tests benchmarks
 
+# phi_S on voices and words nothing was tuned on: rescoring with and without the slowed view
+SPEECH_ONLY = --only whisper+rescore "whisper+rescore 1 view"
+SPEECH_OTHER_VOICES = --clean en-gb-x-rp+m3:120 \
+	--hard en-gb-x-rp+m3:170 en-gb-scotland+f2:170 en+klatt4:175 $(SPEECH_ONLY)
+SPEECH_OTHER_WORDS = --clean en-gb-x-rp+m3:120 en-us+Andy:120 \
+	--hard en-us+Andy:170 en-gb-x-gbclan+f5:170 en-029+m2:170 $(SPEECH_ONLY) \
+	--words ball,car,door,egg,hat,ice,king,lamp,moon,nose,pig,queen,rain,ship,toy,van,wolf,box,yard,zoo,baby,candle,dinner,engine,finger,guitar,island,jacket,ladder,monkey,number,ocean,pocket,rabbit,sister,tiger,violin,winter,zebra,picture
+
 bench: setup ## Run the benchmarks (tables printed, JSON under benchmarks/results/), then `results`
 	$(BIN)/python benchmarks/bench_prepare.py
 	$(BIN)/python benchmarks/bench_train.py
@@ -96,6 +104,10 @@ bench: setup ## Run the benchmarks (tables printed, JSON under benchmarks/result
 	$(BIN)/python benchmarks/bench_lasa.py
 	$(BIN)/python benchmarks/bench_write.py --speech
 	$(BIN)/python benchmarks/bench_speech.py
+	$(BIN)/python benchmarks/bench_speech.py $(SPEECH_OTHER_VOICES) \
+		--out benchmarks/results/bench_speech_other_voices.json
+	$(BIN)/python benchmarks/bench_speech.py $(SPEECH_OTHER_WORDS) \
+		--out benchmarks/results/bench_speech_other_words.json
 	$(BIN)/python benchmarks/bench_simulate.py
 	$(BIN)/python benchmarks/bench_startup.py
 	$(MAKE) results

@@ -287,6 +287,8 @@ SPEECH_TARGETS = {
 
 def _speech(d: dict) -> list[Row]:
     reference = d["settings"]["reference"]
+    words = d["settings"]["words"]
+    said = f"{len(words)} words: {', '.join(words[:3])}, ..."
     rows = []
     for condition, setting in d["settings"]["conditions"].items():
         ref = d["summary"][reference][condition]
@@ -297,7 +299,7 @@ def _speech(d: dict) -> list[Row]:
             s = summary[condition]
             rows.append(
                 Row(
-                    f"speech, {condition} ({', '.join(setting['voices'])}{noise}), {name} "
+                    f"speech, {condition} ({said}; {', '.join(setting['voices'])}{noise}), {name} "
                     "(exact word; median latency, latency ratio)",
                     f"{s['accuracy']:.1%} ({s['median_ms']:,.0f} ms, {s['latency_ratio']:.2f}x)",
                     f"{reference} alone",
@@ -358,6 +360,8 @@ BENCHMARKS: dict[str, Callable[[dict], list[Row]]] = {
     "bench_lasa": _lasa,
     "bench_write": _write_word,
     "bench_speech": _speech,
+    "bench_speech_other_voices": _speech,
+    "bench_speech_other_words": _speech,
     "bench_simulate": _simulate,
     "bench_startup": _startup,
 }
