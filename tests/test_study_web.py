@@ -278,10 +278,15 @@ def write_word(page, k: int, lift: bool = False) -> None:
     page.mouse.up()
 
 
+def pad_on_page(page) -> tuple[dict, float]:
+    """The pad's bounding box on the page, and page pixels per canvas CSS pixel."""
+    box = page.locator("#pad").bounding_box()
+    return box, box["width"] / page.evaluate("PRGCapture.config.canvas_width")
+
+
 def draw(page, points) -> None:
     """One pen stroke through ``points`` (canvas CSS pixels, y down) with the mouse."""
-    box = page.locator("#pad").bounding_box()
-    scale = box["width"] / page.evaluate("PRGCapture.config.canvas_width")
+    box, scale = pad_on_page(page)
     (x, y), *rest = points
     page.mouse.move(box["x"] + x * scale, box["y"] + y * scale)
     page.mouse.down()
@@ -297,8 +302,7 @@ def draw_at_times(page, points, interval_s: float) -> None:
     The events carry their times (Chrome DevTools ``Input.dispatchMouseEvent``'s ``timestamp``,
     which becomes the event's ``timeStamp``), as a tablet's do, so the recorded times are the
     pen's and not when a loaded test machine got round to sending each event."""
-    box = page.locator("#pad").bounding_box()
-    scale = box["width"] / page.evaluate("PRGCapture.config.canvas_width")
+    box, scale = pad_on_page(page)
     devtools = page.context.new_cdp_session(page)
     start = time.time()
     events = [("mousePressed", points[0], 0)]
@@ -383,7 +387,8 @@ def test_captured_human_strokes_fit_a_dmp_that_starts_and_ends_moving(page, tmp_
         (stroke,) = sample["strokes"]
         raw = np.array([p[:2] for p in stroke])
         seconds = np.array([p[2] for p in stroke]) / 1000.0
-        assert np.allclose(np.diff(seconds), 0.010, atol=2e-4)  # the pen's clock, recorded
+        # the pen's clock, recorded (Chromium moves a time by up to about 0.5 ms)
+        assert np.allclose(np.diff(seconds), 0.010, atol=1e-3)
         uniform, duration = uniform_in_time(raw, seconds, n_samples=4 * len(raw))
         size = np.ptp(uniform, axis=0).max()
         errors = {}
