@@ -3,7 +3,7 @@ SHELL := /bin/bash
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
-EXTRAS ?= dev,sweep,speech,speech-base,browser,lasa
+EXTRAS ?= dev,sweep,speech,speech-base,speech-moonshine,browser,lasa
 # Debian packages: espeak-ng speaks the test and demo words, sox converts their audio, chromium
 # runs the study pages in the browser tests (Playwright drives it; no `playwright install`)
 SYSTEM_PACKAGES ?= espeak-ng sox chromium
