@@ -12,10 +12,13 @@ ones) is synthesised with espeak-ng in two conditions:
 
 Each utterance is recognised with each configuration:
 
-- ``whisper``: faster-whisper, offline tiny.en (int8, 2 threads), free transcription — the
-  reference the others are compared with;
+- ``whisper``: faster-whisper, offline tiny.en (int8, 2 threads), free transcription (a word
+  on the short window, see ``WhisperRecogniser.transcribe_short``) — the reference the others
+  are compared with;
 - ``whisper+lexicon``: the lexicon (= ``WORDS``) as hotwords, transcript snapped to the nearest
   lexicon word;
+- ``whisper 30 s window`` and ``whisper+lexicon 30 s window``: the same on Whisper's 30 s window
+  (:class:`Whisper30s`), as before the short window;
 - ``whisper+rescore``: the lexicon word of highest exact probability under Whisper's decoder
   (short encoder window, best-bound pruning), summed over the audio and the audio slowed down
   1.1x (the default ``slowdown``);
@@ -91,6 +94,36 @@ WORDS = (
 )  # fmt: skip
 
 
+class Whisper30s:
+    """Free whisper tiny.en on Whisper's 30 s window (``WhisperRecogniser.transcribe_30s``,
+    what ``recognise`` used for every length before the short window), measured like a
+    configuration: the same reading, checks and lexicon snapping as ``recognise``."""
+
+    backend = "whisper"
+    model = None
+    rescore = False
+    slowdown = 1.0
+
+    def __init__(self, lexicon: tuple[str, ...] | None = None) -> None:
+        self.lexicon = lexicon
+
+    def recognise(self, path: Path) -> str:
+        params = SpeechSettings(lexicon=self.lexicon)
+        samples = load_audio(path)
+        check_audio(samples, params, str(path))
+        text = get_recogniser("whisper").transcribe_30s(samples, params)
+        return _written(text, self.lexicon)
+
+
+def _written(text: str, lexicon: tuple[str, ...] | None) -> str:
+    """The written word of a free transcript, snapped to ``lexicon`` if any (as ``recognise``)."""
+    if lexicon:
+        with contextlib.suppress(UsageError):  # no letters: nothing to snap
+            transcript_to_word(text, "lower")
+            text = snap_to_lexicon(text, lexicon)
+    return transcript_to_word(text, "lower")
+
+
 class Moonshine:
     """Moonshine base-en through ``moonshine_cpp``'s C library, measured like a configuration:
     the same reading and checks as ``recognise`` (:func:`load_audio`, :func:`check_audio`), the
@@ -139,20 +172,17 @@ class Moonshine:
     def recognise(self, path: Path) -> str:
         samples = load_audio(path)
         check_audio(samples, SpeechSettings(), str(path))
-        text = self.transcribe(samples)
-        if self.lexicon:
-            with contextlib.suppress(UsageError):  # no letters: nothing to snap
-                transcript_to_word(text, "lower")
-                text = snap_to_lexicon(text, self.lexicon)
-        return transcript_to_word(text, "lower")
+        return _written(self.transcribe(samples), self.lexicon)
 
 
 def configurations(
     lexicon: tuple[str, ...], wav2vec2: str | None, whisper_base: str | None
-) -> dict[str, SpeechSettings | Moonshine]:
+) -> dict[str, SpeechSettings | Whisper30s | Moonshine]:
     configs = {
         "whisper": SpeechSettings(),
+        "whisper 30 s window": Whisper30s(),
         "whisper+lexicon": SpeechSettings(lexicon=lexicon),
+        "whisper+lexicon 30 s window": Whisper30s(lexicon),
         "whisper+rescore": SpeechSettings(lexicon=lexicon, rescore=True),
         "whisper+rescore 1 view": SpeechSettings(lexicon=lexicon, rescore=True, slowdown=1),
     }
@@ -202,11 +232,11 @@ def synthesise(words, voices, folder: Path, snr_db: float | None) -> list[tuple[
     return items
 
 
-def run_once(path: Path, params: SpeechSettings | Moonshine) -> tuple[str, float]:
+def run_once(path: Path, params: SpeechSettings | Whisper30s | Moonshine) -> tuple[str, float]:
     """(written word or "" when no usable transcript, seconds)."""
     start = time.perf_counter()
     try:
-        if isinstance(params, Moonshine):
+        if isinstance(params, Whisper30s | Moonshine):
             word = params.recognise(path)
         else:
             word = recognise(path, params).word

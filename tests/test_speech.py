@@ -41,6 +41,7 @@ from prg.pipeline.speech import (
 from prg.pipeline.speech.backends.packaged import BASE_SHA256, assemble, whisper_base_folder
 from prg.pipeline.speech.backends.whisper import (
     RESCORE_MIN_FRAMES,
+    SHORT_AUDIO_S,
     WhisperRecogniser,
     rescoring_window,
 )
@@ -426,6 +427,26 @@ def test_whisper_recognises_easy_words_without_lexicon(speech, whisper, word):
     transcript = recognise(speech[word])
     assert transcript.word == word
     assert transcript.backend == "whisper" and transcript.candidates == ()
+
+
+def test_whisper_transcribes_a_word_on_the_short_window_and_a_sentence_on_30_s(
+    speech, whisper, tmp_path, monkeypatch
+):
+    windows = []  # faster-whisper's own transcribe runs the 30 s window
+    full_window = whisper.whisper.transcribe
+
+    def spy(*args, **kwargs):
+        windows.append("30 s")
+        return full_window(*args, **kwargs)
+
+    monkeypatch.setattr(whisper.whisper, "transcribe", spy)
+    assert load_audio(speech["jump"]).size <= SHORT_AUDIO_S * SAMPLE_RATE
+    assert recognise(speech["jump"]).word == "jump" and windows == []
+    sentence = say("the quick brown fox jumps over the lazy dog", tmp_path / "fox.wav")
+    assert load_audio(sentence).size > SHORT_AUDIO_S * SAMPLE_RATE
+    heard = recognise(sentence).word
+    assert windows == ["30 s"]
+    assert "quick brown fox" in heard and "lazy dog" in heard
 
 
 @pytest.mark.parametrize("word", WORDS)
