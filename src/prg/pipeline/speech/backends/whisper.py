@@ -53,9 +53,7 @@ RESCORE_MIN_FRAMES = 500  # shortest encoder window when rescoring, in 10 ms mel
 _RESCORE_BATCH = 16  # decoder passes per CTranslate2 call when rescoring
 SHORT_AUDIO_S = 2.0  # audio up to this long (a word or two) is transcribed on the short window
 _SHORT_NEW_TOKENS = 32  # free tokens after the prompt on the short window
-_HOTWORD_TOKENS = (
-    223  # the lexicon prompt's length limit, as faster-whisper's (max_length // 2 - 1)
-)
+_HOTWORD_TOKENS = 223  # the lexicon prompt's limit, faster-whisper's (max_length // 2 - 1)
 # faster-whisper's defaults for dropping a segment as silence: probability of no speech above
 # 0.6 and mean token log-probability below -1
 _NO_SPEECH_PROB = 0.6
