@@ -81,6 +81,7 @@ from prg.pipeline.speech import (
     snap_to_lexicon,
     transcript_to_word,
 )
+from prg.pipeline.speech.transcript import lexicon_key
 
 RESULTS = Path(__file__).parent / "results"
 REFERENCE = "whisper"
@@ -109,18 +110,21 @@ class Whisper30s:
 
     def recognise(self, path: Path) -> str:
         params = SpeechSettings(lexicon=self.lexicon)
-        samples = load_audio(path)
-        check_audio(samples, params, str(path))
-        text = get_recogniser("whisper").transcribe_30s(samples, params)
+        text = get_recogniser("whisper").transcribe_30s(_read(path), params)
         return _written(text, self.lexicon)
+
+
+def _read(path: Path) -> np.ndarray:
+    """``path`` read and checked as ``recognise`` does."""
+    samples = load_audio(path)
+    check_audio(samples, SpeechSettings(), str(path))
+    return samples
 
 
 def _written(text: str, lexicon: tuple[str, ...] | None) -> str:
     """The written word of a free transcript, snapped to ``lexicon`` if any (as ``recognise``)."""
-    if lexicon:
-        with contextlib.suppress(UsageError):  # no letters: nothing to snap
-            transcript_to_word(text, "lower")
-            text = snap_to_lexicon(text, lexicon)
+    if lexicon and lexicon_key(text):
+        text = snap_to_lexicon(text, lexicon)
     return transcript_to_word(text, "lower")
 
 
@@ -170,9 +174,7 @@ class Moonshine:
         return out
 
     def recognise(self, path: Path) -> str:
-        samples = load_audio(path)
-        check_audio(samples, SpeechSettings(), str(path))
-        return _written(self.transcribe(samples), self.lexicon)
+        return _written(self.transcribe(_read(path)), self.lexicon)
 
 
 def configurations(
