@@ -20,9 +20,11 @@ Each utterance is recognised with each configuration:
 - ``whisper 30 s window`` and ``whisper+lexicon 30 s window``: the same on Whisper's 30 s window
   (:class:`Whisper30s`), as before the short window;
 - ``whisper+rescore``: the lexicon word of highest exact probability under Whisper's decoder
-  (short encoder window, best-bound pruning), summed over the audio and the audio slowed down
-  1.1x (the default ``slowdown``);
+  (3 s encoder window, best-bound pruning), on the audio alone when its best word leads by the
+  default ``view_margin`` (3 nats), else summed over the audio and the audio slowed down 1.1x
+  (the default ``slowdown``);
 - ``whisper+rescore 1 view``: the same on the audio alone (``slowdown=1``);
+- ``whisper+rescore 2 views``: always both views (``view_margin=inf``);
 - ``whisper-base`` and ``whisper-base+rescore``: the same with whisper base (multilingual), when
   ``--whisper-base`` (default: the model assembled by ``prg-speech-models base``) is available;
   otherwise listed as not measured, with the reason;
@@ -56,6 +58,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import functools
+import math
 import os
 import platform
 import shutil
@@ -112,6 +115,11 @@ class Whisper30s:
         params = SpeechSettings(lexicon=self.lexicon)
         text = get_recogniser("whisper").transcribe_30s(_read(path), params)
         return _written(text, self.lexicon)
+
+
+def _finite(value: float | None) -> float | str | None:
+    """``value`` for JSON: infinity as the string "inf"."""
+    return "inf" if value is not None and math.isinf(value) else value
 
 
 def _read(path: Path) -> np.ndarray:
@@ -187,6 +195,9 @@ def configurations(
         "whisper+lexicon 30 s window": Whisper30s(lexicon),
         "whisper+rescore": SpeechSettings(lexicon=lexicon, rescore=True),
         "whisper+rescore 1 view": SpeechSettings(lexicon=lexicon, rescore=True, slowdown=1),
+        "whisper+rescore 2 views": SpeechSettings(
+            lexicon=lexicon, rescore=True, view_margin=math.inf
+        ),
     }
     if whisper_base is not None:
         configs["whisper-base"] = SpeechSettings(model=whisper_base)
@@ -397,6 +408,7 @@ def main() -> None:
                     "lexicon": p.lexicon is not None,
                     "rescore": p.rescore,
                     "slowdown": p.slowdown,
+                    "view_margin": _finite(getattr(p, "view_margin", None)),
                 }
                 for name, p in configs.items()
             },

@@ -38,6 +38,10 @@ class SpeechSettings:
     slowdown : float
         Whisper rescoring: also score the audio slowed down by this factor (1 to 2; 1: the
         audio alone) and sum the two log-probabilities; about twice the latency.
+    view_margin : float
+        Whisper rescoring with a slowdown: when the best word on the audio alone leads every
+        other word by at least this many nats (natural-log probability), the slowed copy is not
+        scored (>= 0; inf: always score both).
     case : {"lower", "upper", "title"}
         Case of the written word.
     max_seconds : float
@@ -56,6 +60,7 @@ class SpeechSettings:
     rescore: bool = False
     prior_weight: float = 0.4
     slowdown: float = 1.1
+    view_margin: float = 3.0
     case: str = "lower"
     max_seconds: float = 30.0
     min_rms_dbfs: float = -50.0
@@ -75,6 +80,8 @@ class SpeechSettings:
             raise UsageError(f"prior_weight must be between 0 and 1, got {self.prior_weight}")
         if not 1 <= self.slowdown <= 2:
             raise UsageError(f"slowdown must be between 1 and 2, got {self.slowdown}")
+        if not self.view_margin >= 0:
+            raise UsageError(f"view_margin must be >= 0, got {self.view_margin}")
         if not (isinstance(self.beam_size, int) and self.beam_size >= 1):
             raise UsageError(f"beam_size must be an integer >= 1, got {self.beam_size!r}")
         if self.lexicon is not None:

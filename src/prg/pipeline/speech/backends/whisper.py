@@ -19,22 +19,20 @@ word ``w`` is ``log sum_v P(v <eot> | audio)`` over its written variants ``v`` i
 {``" w"``, ``" W"``, ``" w."``, ``" W."``} (lower/capitalised, with/without a full stop): the
 exact probability, under Whisper's decoder, that the transcript is that word.
 
-CTranslate2's ``Whisper`` has no method that scores a given token sequence, but
-``Whisper.generate`` with the variant's tokens as the prompt's prefix and
-``return_logits_vocab=True`` returns the decoder's logits at every prefix position (teacher
-forcing) plus the first free step; the log-softmax of those gives each token's and the
-end-of-text token's log-probability. Variants that are prefixes of others (``" w"`` of
-``" w."``) share one decoder pass, and passes are batched over one encoder output. Each pass
-costs about as much as a short free decoding, so words are scored best-bound first (a word's
-probability is at most that of its variants' first tokens, read from one decoder step) and
-scoring stops once the best exact score reaches the next word's bound: the result is the exact
-argmax without scoring every word. (``Whisper.align`` also returns per-token probabilities, but
-renormalised over text tokens only, without the end-of-text probability, so it would favour
-prefixes such as "bell" over "belly".)
+CTranslate2's ``Whisper`` has no call that returns the probability of a given token sequence
+followed by end-of-text (``Whisper.align`` renormalises over text tokens only, so it would
+favour prefixes such as "bell" over "belly"; ``Whisper.generate`` with the sequence as a forced
+prefix steps through it one decoder call per token). Rescoring therefore runs CTranslate2's
+encoder, and Whisper's decoder in PyTorch on the same weights
+(:mod:`~prg.pipeline.speech.backends.whisper_decoder`): every variant of the words being scored
+in one batched pass. Words are scored best-bound first (a word's probability is at most that of
+its variants' first tokens, read from one decoder step) until the best exact score reaches the
+next word's bound: the result is the exact argmax without scoring every word.
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 
 import numpy as np
@@ -43,14 +41,19 @@ from prg.errors import UsageError
 from prg.pipeline.speech.audio import SAMPLE_RATE
 from prg.pipeline.speech.backends.base import model_source, not_cached
 from prg.pipeline.speech.backends.packaged import BASE_NAME, whisper_base_folder
+from prg.pipeline.speech.backends.whisper_decoder import WhisperDecoder
 from prg.pipeline.speech.dependencies import INSTALL, needs
 from prg.pipeline.speech.settings import SpeechSettings
 
-WHISPER_THREADS = 2  # CTranslate2 intra-op threads on the CPU
+# CTranslate2 intra-op threads on the CPU. One: with two, CTranslate2's second OpenMP thread
+# keeps a core busy between calls, and rescoring's PyTorch decoder (whisper_decoder) ran two to
+# three times slower after each encoder call; free transcription of a word was also faster with
+# one (25.6 against 30.4 ms median on bench_speech's clean words).
+WHISPER_THREADS = 1
 WHISPER_PAD_S = 0.25  # seconds of silence added around the audio before free transcription
 RESCORE_PAD_S = 0.5  # seconds of silence added around the audio before rescoring
-RESCORE_MIN_FRAMES = 500  # shortest encoder window when rescoring, in 10 ms mel frames (5 s)
-_RESCORE_BATCH = 16  # decoder passes per CTranslate2 call when rescoring
+FREE_MIN_FRAMES = 500  # shortest encoder window for free transcription, in 10 ms frames (5 s)
+RESCORE_MIN_FRAMES = 300  # shortest encoder window when rescoring (3 s)
 SHORT_AUDIO_S = 2.0  # audio up to this long (a word or two) is transcribed on the short window
 _SHORT_NEW_TOKENS = 32  # free tokens after the prompt on the short window
 _HOTWORD_TOKENS = 223  # the lexicon prompt's limit, faster-whisper's (max_length // 2 - 1)
@@ -66,6 +69,11 @@ class WhisperRecogniser:
     backend = "whisper"
 
     def __init__(self, model: str | None) -> None:
+        # PyTorch before CTranslate2: loaded the other way round, each small PyTorch operation
+        # of the rescoring decoder cost several times more (a word's rescoring took 122
+        # instead of 48 ms)
+        import torch  # noqa: F401
+
         with needs("faster-whisper", self.backend):
             import ctranslate2  # noqa: F401
             from faster_whisper import WhisperModel
@@ -82,6 +90,8 @@ class WhisperRecogniser:
             str(whisper_base_folder()) if model == BASE_NAME else model_source(model, self.backend)
         )
         self.model = model
+        self._folder = source
+        self._decoder: WhisperDecoder | None = None
         try:
             self.whisper = WhisperModel(
                 source,
@@ -147,8 +157,8 @@ class WhisperRecogniser:
         return "".join(segment.text for segment in segments)
 
     def transcribe_short(self, audio: np.ndarray, params: SpeechSettings) -> str:
-        """Free transcription of a word or two: beam search on the short encoder window that
-        rescoring uses (:func:`rescoring_window`), with no token allowed twice.
+        """Free transcription of a word or two: beam search on a short encoder window
+        (:func:`window_frames`, at least FREE_MIN_FRAMES), with no token allowed twice.
 
         On a short window the decoder repeats what it heard ("cut cut cut") instead of ending
         the transcript; forbidding repeated tokens makes it end. Measured with tiny.en on
@@ -168,8 +178,10 @@ class WhisperRecogniser:
             hotwords = tok.encode(" " + " ".join(params.lexicon))[:_HOTWORD_TOKENS]
             prompt = [tok.sot_prev, *hotwords]
         prompt += [*tok.sot_sequence, tok.no_timestamps]
+        features = self._features(audio)
+        frames = window_frames(features.shape[1], FREE_MIN_FRAMES)
         result = self.whisper.model.generate(
-            ctranslate2.StorageView.from_array(self._encode(audio)),
+            ctranslate2.StorageView.from_array(self._encode([features], frames)),
             [prompt],
             beam_size=params.beam_size,
             max_length=len(prompt) + _SHORT_NEW_TOKENS,
@@ -192,52 +204,102 @@ class WhisperRecogniser:
         probability drifts to words the decoder expects anyway ("hello", "music"). It is
         computed once per lexicon (on the views of one second of silence) and cached.
 
-        Exact scores are computed best-bound first: a variant's probability is at most its
-        first token's, so a word's score is bounded by the log-sum over its variants' distinct
-        first tokens (one decoder step per view for all words) minus its prior term. Words are
-        scored in bound order, in growing batches, until the best exact score reaches the next
-        unscored word's bound: the returned best word is the exact argmax. Words left unscored
-        get NaN.
+        The audio alone is scored first. When its best word leads every other word by at least
+        ``params.view_margin`` (nats), the slowed copy would not change the winner in practice
+        and is not scored: the scores are those of the audio alone. Otherwise both views are
+        scored and summed (in one batch).
+
+        Scores are computed best-bound first (:meth:`_best_first`): the best word is the exact
+        argmax, and words that cannot win are left unscored (NaN).
         """
-        from scipy.special import logsumexp
+        import torch
 
         tok = self._tokenizer(params.language)
         start = [*tok.sot_sequence, tok.no_timestamps]
         variants = self._lexicon_variants(tuple(words), params.language)
-        prior = np.zeros(len(words))
+        prior = np.zeros((2, len(words)))
         if params.prior_weight:
             prior = params.prior_weight * self._silence_scores(
                 tuple(words), params.language, params.slowdown
             )
-        encoded = [self._encode(view) for view in views(audio, params.slowdown)]
-        bounds = np.zeros(len(words))
-        for one in encoded:
-            first = self._forced(one, start, [()])[()][0]  # log P(first token)
-            bounds += [logsumexp([first[t] for t in {v[0] for v in vs}]) for vs in variants]
-        order = np.argsort(-(bounds - prior), kind="stable")
-        scores = np.full(len(words), np.nan)
-        done, size = 0, 2
+        features = [self._features(view) for view in views(audio, params.slowdown)]
+        frames = window_frames(max(f.shape[1] for f in features), RESCORE_MIN_FRAMES)
+        memory = self.decoder.memory(self._encode(features[:1], frames))
+        margin = params.view_margin if len(features) > 1 else 0.0
+        scores, lead = self._best_first(memory, start, tok.eot, variants, prior[0], margin)
+        if len(features) == 1 or (np.isfinite(margin) and lead >= margin):
+            return scores
+        slowed = self.decoder.memory(self._encode(features[1:], frames))
+        memory = [
+            tuple(torch.cat(pair) for pair in zip(mine, theirs, strict=True))
+            for mine, theirs in zip(memory, slowed, strict=True)
+        ]
+        return self._best_first(memory, start, tok.eot, variants, prior.sum(axis=0), 0.0)[0]
+
+    def _best_first(self, memory, start, eot, variants, prior, margin: float):
+        """Scores (:meth:`_exact` summed over the views in ``memory``, minus ``prior``) of the
+        words best-bound first, and the best word's proven lead over every other word.
+
+        A variant's probability is at most its first token's, so a word's score is bounded by
+        the log-sum over its variants' distinct first tokens minus its prior. Words are ranked
+        by that bound (read from one decoder step, on the lexicon's first tokens only: the
+        normaliser, the same for every word, does not change the ranking), then scored in rank
+        order, in growing batches, until the best exact score leads the next unscored word's
+        (exact) bound by ``margin``, or a scored word comes within ``margin`` of the best.
+        With margin 0 the best word is the exact argmax; the lead is the best score minus the
+        highest other exact score or unscored bound (a lower bound on its true lead).
+        """
+        firsts = [sorted({v[0] for v in vs}) for vs in variants]
+        tokens = sorted({t for ts in firsts for t in ts})
+        logits = dict(zip(tokens, self.decoder.first_logits(memory, start, tokens).T, strict=True))
+        rank = [_logsumexp([logits[t] for t in ts], axis=0).sum() for ts in firsts]
+        order = np.argsort(-(np.array(rank) - prior), kind="stable")
+        scores = np.full(len(variants), np.nan)
+        done, size, lead = 0, 2, np.inf
         while done < len(order):
             batch = order[done : done + size]
-            exact = self._exact(encoded, start, tok.eot, [variants[i] for i in batch])
-            scores[batch] = exact - prior[batch]
+            exact, first = self._exact(memory, start, eot, [variants[i] for i in batch])
+            scores[batch] = exact.sum(axis=0) - prior[batch]
             done, size = done + len(batch), min(2 * size, 8)
-            nxt = order[done] if done < len(order) else None
-            if nxt is not None and np.nanmax(scores) >= bounds[nxt] - prior[nxt]:
+            best = np.nanmax(scores)
+            others = np.sort(scores[~np.isnan(scores)])[:-1]
+            bound = -np.inf
+            if done < len(order):
+                nxt = order[done]
+                bound = _logsumexp(first[:, firsts[nxt]], axis=1).sum() - prior[nxt]
+            lead = best - max(bound, others[-1] if len(others) else -np.inf)
+            if best >= bound + margin or (len(others) and others[-1] > best - margin):
                 break
-        return scores
+        return scores, lead
+
+    @property
+    def decoder(self) -> WhisperDecoder:
+        """The model's decoder in PyTorch (:mod:`.whisper_decoder`), loaded on first use."""
+        if self._decoder is None:
+            folder = self._folder
+            if not os.path.isdir(folder):  # a hub name: the folder of its cached copy
+                from faster_whisper.utils import download_model
+
+                folder = download_model(folder, local_files_only=True)
+            self._decoder = WhisperDecoder.from_model_folder(folder)
+        return self._decoder
 
     def _silence_scores(self, words: tuple[str, ...], language: str, slowdown: float):
-        """``log P(word | one second of silence)`` for every word, summed over the views of the
-        silence, cached per lexicon."""
+        """``log P(word | one second of silence)``, shape (2, words): on the silence, and on its
+        slowed copy (zero without a slowdown); cached per lexicon."""
         key = (words, language, slowdown)
         if key not in self._silence:
             tok = self._tokenizer(language)
             start = [*tok.sot_sequence, tok.no_timestamps]
-            silence = np.zeros(SAMPLE_RATE, dtype=np.float32)
-            encoded = [self._encode(view) for view in views(silence, slowdown)]
+            features = [
+                self._features(view)
+                for view in views(np.zeros(SAMPLE_RATE, dtype=np.float32), slowdown)
+            ]
+            frames = window_frames(max(f.shape[1] for f in features), RESCORE_MIN_FRAMES)
+            memory = self.decoder.memory(self._encode(features, frames))
             variants = self._lexicon_variants(words, language)
-            self._silence[key] = self._exact(encoded, start, tok.eot, variants)
+            scores = self._exact(memory, start, tok.eot, variants)[0]
+            self._silence[key] = np.vstack([scores, np.zeros((2 - len(scores), len(words)))])
         return self._silence[key]
 
     def _lexicon_variants(self, words: tuple[str, ...], language: str):
@@ -247,26 +309,26 @@ class WhisperRecogniser:
             self._variants[key] = written_variants(self._tokenizer(language), words)
         return self._variants[key]
 
-    def _encode(self, audio: np.ndarray) -> np.ndarray:
-        """The encoder output for ``audio`` on the rescoring window (:func:`rescoring_window`)."""
-        return np.asarray(self.whisper.encode(rescoring_window(self._features(audio))[None]))
+    def _encode(self, features: list[np.ndarray], frames: int) -> np.ndarray:
+        """The encoder outputs (views, frames / 2, width) of log-mel ``features`` (one per
+        view), in one batch, each cut or padded to ``frames`` (:func:`short_window`)."""
+        batch = np.stack([short_window(f, frames) for f in features])
+        return np.asarray(self.whisper.encode(batch))
 
-    def _exact(self, encoded: list, start: list[int], eot: int, variants: list[list[tuple]]):
-        """``log sum_v P(v <eot>)`` for each word given by its variants' token tuples, summed
-        over the encoder outputs ``encoded`` (one per view)."""
-        from scipy.special import logsumexp
-
-        every = {v for vs in variants for v in vs}
-        scores = np.zeros(len(variants))
-        for one in encoded:
-            steps = self._forced(one, start, every)
-            for i, vs in enumerate(variants):
-                values = []
-                for v in vs:
-                    logp = next(lp for seq, lp in steps.items() if seq[: len(v)] == v)
-                    values.append(sum(logp[k][t] for k, t in enumerate(v)) + logp[len(v)][eot])
-                scores[i] += logsumexp(values)
-        return scores
+    def _exact(self, memory, start: list[int], eot: int, variants: list[list[tuple]]):
+        """``log sum_v P(v <eot>)``, shape (views, words), for each word given by its variants'
+        token tuples and each view in the decoder ``memory``; and the first token's
+        log-probabilities (views, vocabulary), read from the same pass."""
+        prefixes = {v[:k] for vs in variants for v in vs for k in range(len(v) + 1)}
+        logp = self.decoder.next_token(memory, start, prefixes)
+        scores = [
+            _logsumexp(
+                [sum(logp[v[:k]][:, t] for k, t in enumerate(v)) + logp[v][:, eot] for v in vs],
+                axis=0,
+            )
+            for vs in variants
+        ]
+        return np.array(scores).T, logp[()]
 
     def _features(self, audio: np.ndarray) -> np.ndarray:
         """Log-mel features, shape (80, frames), of ``audio`` with RESCORE_PAD_S of silence
@@ -276,40 +338,6 @@ class WhisperRecogniser:
             np.concatenate([pad, audio.astype(np.float32, copy=False), pad])
         )
 
-    def _forced(
-        self, encoded: np.ndarray, start: list[int], sequences
-    ) -> dict[tuple[int, ...], list[_StepLogProbabilities]]:
-        """Teacher-forced decoder log-probabilities: for each token sequence ``s`` (one that
-        prefixes another shares its pass), the ``len(s) + 1`` next-token log-softmax vectors."""
-        import ctranslate2
-
-        every = set(sequences)
-        passes = sorted(
-            (s for s in every if not any(o != s and o[: len(s)] == s for o in every)),
-            key=lambda s: (len(s), s),  # similar lengths share a batch
-        )
-        # CTranslate2 counts the forced tokens against max_length more than once (measured with
-        # 4.8: a prefix of L tokens needs max_length >= len(start) + 2 L to return its L + 1
-        # steps), so the limit is generous; the free steps after the prefix stop at <eot>.
-        out: dict[tuple[int, ...], list[np.ndarray]] = {}
-        for lo in range(0, len(passes), _RESCORE_BATCH):
-            chunk = passes[lo : lo + _RESCORE_BATCH]
-            results = self.whisper.model.generate(
-                ctranslate2.StorageView.from_array(np.repeat(encoded, len(chunk), axis=0)),
-                [start + list(seq) for seq in chunk],
-                beam_size=1,
-                max_length=len(start) + 2 * max(len(s) for s in chunk) + 4,
-                return_logits_vocab=True,
-                suppress_blank=False,
-                suppress_tokens=[],
-            )
-            for seq, result in zip(chunk, results, strict=True):
-                logits = [np.asarray(step) for step in result.logits[0][: len(seq) + 1]]
-                if len(logits) != len(seq) + 1:
-                    raise RuntimeError("CTranslate2 returned fewer decoder steps than forced")
-                out[seq] = [_StepLogProbabilities(step) for step in logits]
-        return out
-
 
 def written_variants(tok, words: Sequence[str]) -> list[list[tuple[int, ...]]]:
     """Per word, the token tuples of its written variants: `` w``, `` W`` (capitalised), each
@@ -318,21 +346,6 @@ def written_variants(tok, words: Sequence[str]) -> list[list[tuple[int, ...]]]:
         [tuple(tok.encode(form + end)) for form in forms for end in ("", ".")]
         for forms in (sorted({f" {w}", f" {w[:1].upper()}{w[1:]}"}) for w in words)
     ]
-
-
-class _StepLogProbabilities:
-    """One decoder step's next-token log-probabilities, computed per token on demand (a full
-    log-softmax over Whisper's 51,864-token vocabulary would cost more than the few tokens
-    rescoring reads)."""
-
-    def __init__(self, logits: np.ndarray) -> None:
-        from scipy.special import logsumexp
-
-        self.logits = logits
-        self.log_total = float(logsumexp(logits.astype(np.float64)))
-
-    def __getitem__(self, token: int) -> float:
-        return float(self.logits[token]) - self.log_total
 
 
 def views(audio: np.ndarray, slowdown: float) -> list[np.ndarray]:
@@ -358,21 +371,32 @@ def views(audio: np.ndarray, slowdown: float) -> list[np.ndarray]:
     return [audio, slowed]
 
 
-def rescoring_window(features: np.ndarray) -> np.ndarray:
-    """The encoder input for rescoring: ``features`` (80, frames) cut or padded with their
-    minimum (the value of silence) to an even frame count between RESCORE_MIN_FRAMES and
-    Whisper's 3000.
+def window_frames(frames: int, min_frames: int) -> int:
+    """The encoder window for ``frames`` mel frames (10 ms each) of audio: an even count between
+    ``min_frames`` and Whisper's 3000.
 
     Whisper is trained on 30 s windows, but its encoder runs on shorter ones (CTranslate2 slices
-    the positional embedding), and the decoder's cross-attention then spans fewer positions:
-    an isolated word's 5 s window costs tiny.en's encoder about 20 ms instead of 310 ms. Free
-    transcription on short windows goes wrong (repeated words); scoring a closed list of words
-    does not (measured on 40 words in 4 unseen espeak-ng voices, see the README).
+    the positional embedding), and the decoder's cross-attention then spans fewer positions: an
+    isolated word's 3 s window costs tiny.en's encoder about 9 ms instead of 310 ms. How short
+    is measured per use (``benchmarks/bench_speech.py``, the README): free transcription of a
+    word got fewer words right on 3 s than on 5 s (FREE_MIN_FRAMES), rescoring as many
+    (RESCORE_MIN_FRAMES).
     """
-    frames = min(max(features.shape[1], RESCORE_MIN_FRAMES), 3000)
-    frames += frames % 2
+    frames = min(max(frames, min_frames), 3000)
+    return frames + frames % 2
+
+
+def short_window(features: np.ndarray, frames: int) -> np.ndarray:
+    """``features`` (80, length) cut or padded with their minimum (the value of silence) to
+    ``frames`` frames."""
     if features.shape[1] >= frames:
         return features[:, :frames]
     return np.pad(
         features, ((0, 0), (0, frames - features.shape[1])), constant_values=features.min()
     )
+
+
+def _logsumexp(values, axis: int):
+    """``log sum exp`` along ``axis`` (numpy's reduction: scipy's costs more per call than the
+    few values rescoring adds up)."""
+    return np.logaddexp.reduce(np.asarray(values), axis=axis)
