@@ -206,8 +206,9 @@ class WhisperRecogniser:
 
         The audio alone is scored first. When its best word leads every other word by at least
         ``params.view_margin`` (nats), the slowed copy would not change the winner in practice
-        and is not scored: the scores are those of the audio alone. Otherwise both views are
-        scored and summed (in one batch).
+        and is not scored: the scores are those of the audio alone. Otherwise the slowed copy is
+        encoded too, and both views are scored and summed, in the order of the audio alone's
+        scores. With an infinite margin both views are encoded and scored at once.
 
         Scores are computed best-bound first (:meth:`_best_first`): the best word is the exact
         argmax, and words that cannot win are left unscored (NaN).
@@ -222,55 +223,69 @@ class WhisperRecogniser:
             prior = params.prior_weight * self._silence_scores(
                 tuple(words), params.language, params.slowdown
             )
-        features = [self._features(view) for view in views(audio, params.slowdown)]
-        frames = window_frames(max(f.shape[1] for f in features), RESCORE_MIN_FRAMES)
-        memory = self.decoder.memory(self._encode(features[:1], frames))
-        margin = params.view_margin if len(features) > 1 else 0.0
-        scores, lead = self._best_first(memory, start, tok.eot, variants, prior[0], margin)
-        if len(features) == 1 or (np.isfinite(margin) and lead >= margin):
+        if params.slowdown != 1 and not np.isfinite(params.view_margin):  # both views at once
+            features = [self._features(view) for view in views(audio, params.slowdown)]
+            frames = window_frames(max(f.shape[1] for f in features), RESCORE_MIN_FRAMES)
+            memory = self.decoder.memory(self._encode(features, frames))
+            return self._best_first(memory, start, tok.eot, variants, prior.sum(axis=0), 0.0)[0]
+        features = self._features(audio)
+        frames = window_frames(features.shape[1], RESCORE_MIN_FRAMES)
+        memory = self.decoder.memory(self._encode([features], frames))
+        margin = params.view_margin if params.slowdown != 1 else 0.0
+        scores, lead, rank = self._best_first(memory, start, tok.eot, variants, prior[0], margin)
+        if params.slowdown == 1 or lead >= margin:
             return scores
-        slowed = self.decoder.memory(self._encode(features[1:], frames))
-        memory = [
-            tuple(torch.cat(pair) for pair in zip(mine, theirs, strict=True))
-            for mine, theirs in zip(memory, slowed, strict=True)
-        ]
-        return self._best_first(memory, start, tok.eot, variants, prior.sum(axis=0), 0.0)[0]
+        slowed = self._features(views(audio, params.slowdown)[1])
+        if slowed.shape[1] <= frames:
+            more = self.decoder.memory(self._encode([slowed], frames))
+            memory = [
+                tuple(torch.cat(pair) for pair in zip(mine, theirs, strict=True))
+                for mine, theirs in zip(memory, more, strict=True)
+            ]
+        else:  # the slowed copy needs a longer window: both views on it
+            frames = window_frames(slowed.shape[1], RESCORE_MIN_FRAMES)
+            memory = self.decoder.memory(self._encode([features, slowed], frames))
+        # ranked by the audio alone's scores and bounds: no ranking pass
+        order = np.argsort(-rank, kind="stable")
+        return self._best_first(memory, start, tok.eot, variants, prior.sum(axis=0), 0.0, order)[0]
 
-    def _best_first(self, memory, start, eot, variants, prior, margin: float):
+    def _best_first(self, memory, start, eot, variants, prior, margin: float, order=None):
         """Scores (:meth:`_exact` summed over the views in ``memory``, minus ``prior``) of the
-        words best-bound first, and the best word's proven lead over every other word.
+        words best-bound first; the best word's proven lead over every other word; and each
+        word's exact score or, if unscored, its bound.
 
         A variant's probability is at most its first token's, so a word's score is bounded by
         the log-sum over its variants' distinct first tokens minus its prior. Words are ranked
         by that bound (read from one decoder step, on the lexicon's first tokens only: the
-        normaliser, the same for every word, does not change the ranking), then scored in rank
-        order, in growing batches, until the best exact score leads the next unscored word's
-        (exact) bound by ``margin``, or a scored word comes within ``margin`` of the best.
-        With margin 0 the best word is the exact argmax; the lead is the best score minus the
-        highest other exact score or unscored bound (a lower bound on its true lead).
+        normaliser, the same for every word, does not change the ranking), unless ``order``
+        gives the ranking, then scored in rank order, in growing batches, until the best exact
+        score leads the next unscored word's (exact) bound by ``margin``, or a scored word comes
+        within ``margin`` of the best. With margin 0 the best word is the exact argmax; the
+        lead is the best score minus the highest other exact score or unscored bound (a lower
+        bound on its true lead).
         """
         firsts = [sorted({v[0] for v in vs}) for vs in variants]
-        tokens = sorted({t for ts in firsts for t in ts})
-        logits = dict(zip(tokens, self.decoder.first_logits(memory, start, tokens).T, strict=True))
-        rank = [_logsumexp([logits[t] for t in ts], axis=0).sum() for ts in firsts]
-        order = np.argsort(-(np.array(rank) - prior), kind="stable")
+        if order is None:
+            tokens = sorted({t for ts in firsts for t in ts})
+            logits = self.decoder.first_logits(memory, start, tokens).T
+            logits = dict(zip(tokens, logits, strict=True))
+            rank = [_logsumexp([logits[t] for t in ts], axis=0).sum() for ts in firsts]
+            order = np.argsort(-(np.array(rank) - prior), kind="stable")
         scores = np.full(len(variants), np.nan)
-        done, size, lead = 0, 2, np.inf
-        while done < len(order):
+        done, size = 0, 2
+        while True:
             batch = order[done : done + size]
             exact, first = self._exact(memory, start, eot, [variants[i] for i in batch])
             scores[batch] = exact.sum(axis=0) - prior[batch]
             done, size = done + len(batch), min(2 * size, 8)
+            bounds = np.array([_logsumexp(first[:, ts], axis=1).sum() for ts in firsts]) - prior
             best = np.nanmax(scores)
             others = np.sort(scores[~np.isnan(scores)])[:-1]
-            bound = -np.inf
-            if done < len(order):
-                nxt = order[done]
-                bound = _logsumexp(first[:, firsts[nxt]], axis=1).sum() - prior[nxt]
-            lead = best - max(bound, others[-1] if len(others) else -np.inf)
-            if best >= bound + margin or (len(others) and others[-1] > best - margin):
+            rival = others[-1] if len(others) else -np.inf
+            nxt = bounds[order[done]] if done < len(order) else -np.inf
+            if done >= len(order) or best >= nxt + margin or rival > best - margin:
                 break
-        return scores, lead
+        return scores, best - max(rival, nxt), np.where(np.isnan(scores), bounds, scores)
 
     @property
     def decoder(self) -> WhisperDecoder:
