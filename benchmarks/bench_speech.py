@@ -39,10 +39,10 @@ Each utterance is recognised with each configuration:
   not measured when the package is missing.
 
 Per utterance the configurations run one after another (interleaved, so machine load affects
-them alike), starting one configuration further along the list at each utterance: whichever runs
-first after the others pays for the caches they emptied (with a fixed order, rescoring that ran
-right after the 30 s window measured a 45 ms median on the clean words, against 30 ms when run
-alone), and rotating spreads that cost over all. Each recogniser is loaded and warmed up on one utterance before timing. Latency is
+them alike), in an order shuffled per utterance (seeded): a configuration pays for the caches
+the one before it emptied (with a fixed order, rescoring that always ran right after the 30 s
+window measured a 44 ms median on the clean words, against 34 ms when run after light ones), and
+shuffling spreads that cost over all. Each recogniser is loaded and warmed up on one utterance before timing. Latency is
 the wall time of ``recognise(path, params)`` (read, resample, checks, recognition) with
 ``time.perf_counter``. A word counts as correct when the written word equals it exactly; the
 letter error rate (LER) is the edit distance between written and spoken word over the spoken
@@ -64,6 +64,7 @@ import functools
 import math
 import os
 import platform
+import random
 import shutil
 import statistics
 import subprocess
@@ -335,8 +336,7 @@ def main() -> None:
         records: dict[str, list[dict]] = {name: [] for name in configs}
         every = [(c, *item) for c, its in items.items() for item in its]
         for k, (condition, word, voice, path) in enumerate(every, 1):
-            names = list(configs)
-            for name in names[k % len(names) :] + names[: k % len(names)]:
+            for name in random.Random(k).sample(list(configs), len(configs)):
                 params = configs[name]
                 heard, seconds = run_once(path, params)
                 records[name].append(
