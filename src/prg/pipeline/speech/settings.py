@@ -37,7 +37,7 @@ class SpeechSettings:
         information). Takes back the decoder's preference for words it expects anyway.
     slowdown : float
         Whisper rescoring: also score the audio slowed down by this factor (1 to 2; 1: the
-        audio alone) and sum the two log-probabilities; about twice the latency.
+        audio alone) and sum the two log-probabilities, when ``view_margin`` calls for it.
     view_margin : float
         Whisper rescoring with a slowdown: when the best word on the audio alone leads every
         other word by at least this many nats (natural-log probability), the slowed copy is not
