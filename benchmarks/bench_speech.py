@@ -12,7 +12,7 @@ ones) is synthesised with espeak-ng in two conditions:
 
 Each utterance is recognised with each configuration:
 
-- ``whisper``: faster-whisper, offline tiny.en (int8, 2 threads), free transcription (a word
+- ``whisper``: faster-whisper, offline tiny.en (int8, 1 thread), free transcription (a word
   on the short window, see ``WhisperRecogniser.transcribe_short``) — the reference the others
   are compared with;
 - ``whisper+lexicon``: the lexicon (= ``WORDS``) as hotwords, transcript snapped to the nearest
@@ -42,8 +42,8 @@ Per utterance the configurations run one after another (interleaved, so machine 
 them alike), in an order shuffled per utterance (seeded): a configuration pays for the caches
 the one before it emptied (with a fixed order, rescoring that always ran right after the 30 s
 window measured a 44 ms median on the clean words, against 34 ms when run after light ones), and
-shuffling spreads that cost over all. Each recogniser is loaded and warmed up on one utterance before timing. Latency is
-the wall time of ``recognise(path, params)`` (read, resample, checks, recognition) with
+shuffling spreads that cost over all. Each recogniser is loaded and warmed up on one utterance
+before timing. Latency is the wall time of ``recognise(path, params)`` (read, resample, checks, recognition) with
 ``time.perf_counter``. A word counts as correct when the written word equals it exactly; the
 letter error rate (LER) is the edit distance between written and spoken word over the spoken
 word's length (an utterance with no usable transcript counts as LER 1). Ratios: accuracy and

@@ -224,27 +224,23 @@ class WhisperRecogniser:
                 tuple(words), params.language, params.slowdown
             )
         if params.slowdown != 1 and not np.isfinite(params.view_margin):  # both views at once
-            features = [self._features(view) for view in views(audio, params.slowdown)]
-            frames = window_frames(max(f.shape[1] for f in features), RESCORE_MIN_FRAMES)
-            memory = self.decoder.memory(self._encode(features, frames))
+            memory, _ = self._memory([self._features(v) for v in views(audio, params.slowdown)])
             return self._best_first(memory, start, tok.eot, variants, prior.sum(axis=0), 0.0)[0]
         features = self._features(audio)
-        frames = window_frames(features.shape[1], RESCORE_MIN_FRAMES)
-        memory = self.decoder.memory(self._encode([features], frames))
+        memory, frames = self._memory([features])
         margin = params.view_margin if params.slowdown != 1 else 0.0
         scores, lead, rank = self._best_first(memory, start, tok.eot, variants, prior[0], margin)
         if params.slowdown == 1 or lead >= margin:
             return scores
         slowed = self._features(views(audio, params.slowdown)[1])
         if slowed.shape[1] <= frames:
-            more = self.decoder.memory(self._encode([slowed], frames))
+            more, _ = self._memory([slowed], frames)
             memory = [
                 tuple(torch.cat(pair) for pair in zip(mine, theirs, strict=True))
                 for mine, theirs in zip(memory, more, strict=True)
             ]
         else:  # the slowed copy needs a longer window: both views on it
-            frames = window_frames(slowed.shape[1], RESCORE_MIN_FRAMES)
-            memory = self.decoder.memory(self._encode([features, slowed], frames))
+            memory, _ = self._memory([features, slowed])
         # ranked by the audio alone's scores and bounds: no ranking pass
         order = np.argsort(-rank, kind="stable")
         return self._best_first(memory, start, tok.eot, variants, prior.sum(axis=0), 0.0, order)[0]
@@ -299,6 +295,14 @@ class WhisperRecogniser:
             self._decoder = WhisperDecoder.from_model_folder(folder)
         return self._decoder
 
+    def _memory(self, features: list[np.ndarray], frames: int | None = None):
+        """The decoder memory of the views whose log-mel ``features`` are given, encoded in one
+        batch on a ``frames`` window (default: the rescoring window of the longest), and that
+        window's frame count."""
+        if frames is None:
+            frames = window_frames(max(f.shape[1] for f in features), RESCORE_MIN_FRAMES)
+        return self.decoder.memory(self._encode(features, frames)), frames
+
     def _silence_scores(self, words: tuple[str, ...], language: str, slowdown: float):
         """``log P(word | one second of silence)``, shape (2, words): on the silence, and on its
         slowed copy (zero without a slowdown); cached per lexicon."""
@@ -306,12 +310,8 @@ class WhisperRecogniser:
         if key not in self._silence:
             tok = self._tokenizer(language)
             start = [*tok.sot_sequence, tok.no_timestamps]
-            features = [
-                self._features(view)
-                for view in views(np.zeros(SAMPLE_RATE, dtype=np.float32), slowdown)
-            ]
-            frames = window_frames(max(f.shape[1] for f in features), RESCORE_MIN_FRAMES)
-            memory = self.decoder.memory(self._encode(features, frames))
+            silence = np.zeros(SAMPLE_RATE, dtype=np.float32)
+            memory, _ = self._memory([self._features(view) for view in views(silence, slowdown)])
             variants = self._lexicon_variants(words, language)
             scores = self._exact(memory, start, tok.eot, variants)[0]
             self._silence[key] = np.vstack([scores, np.zeros((2 - len(scores), len(words)))])
