@@ -43,8 +43,8 @@ them alike), in an order shuffled per utterance (seeded): a configuration pays f
 the one before it emptied (with a fixed order, rescoring that always ran right after the 30 s
 window measured a 44 ms median on the clean words, against 34 ms when run after light ones), and
 shuffling spreads that cost over all. Each recogniser is loaded and warmed up on one utterance
-before timing. Latency is the wall time of ``recognise(path, params)`` (read, resample, checks, recognition) with
-``time.perf_counter``. A word counts as correct when the written word equals it exactly; the
+before timing. Latency is the wall time of ``recognise(path, params)`` (read, resample, checks,
+recognition) with ``time.perf_counter``. A word counts as correct when the written word equals it exactly; the
 letter error rate (LER) is the edit distance between written and spoken word over the spoken
 word's length (an utterance with no usable transcript counts as LER 1). Ratios: accuracy and
 median latency of each configuration over the reference's, in the same condition of the same run.
