@@ -21,7 +21,7 @@ Each utterance is recognised with each configuration:
   (:class:`Whisper30s`), as before the short window;
 - ``whisper+rescore``: the lexicon word of highest exact probability under Whisper's decoder
   (3 s encoder window, best-bound pruning), on the audio alone when its best word leads by the
-  default ``view_margin`` (3 nats), else summed over the audio and the audio slowed down 1.1x
+  default ``view_margin`` (2 nats), else summed over the audio and the audio slowed down 1.1x
   (the default ``slowdown``);
 - ``whisper+rescore 1 view``: the same on the audio alone (``slowdown=1``);
 - ``whisper+rescore 2 views``: always both views (``view_margin=inf``);

@@ -46,7 +46,7 @@ from prg.pipeline.speech.backends.whisper import (
     short_window,
     window_frames,
 )
-from prg.pipeline.speech.backends.whisper_decoder import read_model_bin
+from prg.pipeline.speech.backends.whisper_decoder import prefix_tree, read_model_bin
 
 WORDS = ("bell", "cat", "jump", "hello", "window")  # the paper's three, one easy, one held out
 LEXICON = ("bell", "cat", "jump", "hello", "window", "yellow", "belly", "house")
@@ -732,6 +732,66 @@ def test_decoder_in_pytorch_agrees_with_ctranslate2(speech, whisper):
         assert int(np.argmax(mine)) == int(np.argmax(reference))
         following = (*word, tok.eot)[k]
         assert mine[following] == pytest.approx(reference[following], abs=0.3)
+
+
+def test_prefix_tree_decodes_each_branch_as_its_own_sequence(speech, whisper):
+    """One pass over the prefix tree of several written variants gives, for every prefix, the
+    next-token log-probabilities of decoding that prefix alone, causally: a node sees its
+    ancestors and nothing else."""
+    import torch
+
+    tok = whisper._tokenizer("en")
+    start = [*tok.sot_sequence, tok.no_timestamps]
+    decoder = whisper.decoder
+    features = whisper._features(load_audio(speech["window"]))
+    memory = decoder.memory(
+        whisper._encode([features, features[:, ::-1].copy()], RESCORE_MIN_FRAMES)
+    )
+    variants = [tuple(tok.encode(form)) for form in (" window", " Window.", " wind", " yellow")]
+    prefixes = {v[:k] for v in variants for k in range(len(v) + 1)}
+    together = decoder.next_token(memory, start, prefixes)
+    assert set(together) == prefixes
+    for prefix in prefixes:
+        sequence = [*start, *prefix]
+        with torch.inference_mode():
+            hidden = decoder.hidden(*prefix_tree(sequence, [()]), memory)[:, -1]
+            alone = decoder.log_probabilities(hidden).numpy()
+        # bfloat16 rounding differs with the batch shape; a wrong mask costs nats
+        np.testing.assert_allclose(together[prefix], alone, atol=0.15)
+
+
+def test_prefix_tree_nodes_see_their_ancestors():
+    tokens, positions, visible = prefix_tree([7, 8], [(), (1,), (1, 2), (3,)])
+    assert tokens.tolist() == [7, 8, 1, 2, 3]
+    assert positions.tolist() == [0, 1, 2, 3, 2]
+    assert visible.int().tolist() == [
+        [1, 0, 0, 0, 0],
+        [1, 1, 0, 0, 0],
+        [1, 1, 1, 0, 0],
+        [1, 1, 1, 1, 0],
+        [1, 1, 0, 0, 1],
+    ]
+
+
+@pytest.mark.parametrize("gelu", [False, True])
+def test_prepacked_linear_map_matches_the_plain_one(monkeypatch, gelu):
+    """Where oneDNN prepacks the bfloat16 weights, the map gives what ``F.linear`` gives."""
+    import torch
+
+    from prg.pipeline.speech.backends import whisper_decoder
+
+    weight, bias = torch.randn(48, 32) / 6, torch.randn(48)
+    x = torch.randn(2, 5, 32)
+    packed = whisper_decoder._LinearMap(weight, bias)
+    monkeypatch.setattr(whisper_decoder, "_onednn_bfloat16", lambda: False)
+    plain = whisper_decoder._LinearMap(weight, bias)
+    assert plain.packed is None
+    expected = torch.nn.functional.linear(x, weight, bias)
+    expected = torch.nn.functional.gelu(expected) if gelu else expected
+    for linear_map in (packed, plain):
+        got = linear_map(x, gelu=gelu)
+        assert got.dtype == torch.float32 and got.shape == (2, 5, 48)
+        torch.testing.assert_close(got, expected, atol=0.1, rtol=0.02)
 
 
 def test_model_bin_reader_refuses_a_broken_file(tmp_path):

@@ -60,7 +60,7 @@ class SpeechSettings:
     rescore: bool = False
     prior_weight: float = 0.4
     slowdown: float = 1.1
-    view_margin: float = 3.0
+    view_margin: float = 2.0
     case: str = "lower"
     max_seconds: float = 30.0
     min_rms_dbfs: float = -50.0
