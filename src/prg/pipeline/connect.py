@@ -310,13 +310,14 @@ def _initial_heading(prev: np.ndarray, towards: np.ndarray) -> float:
     return math.atan2(d[1], d[0])
 
 
-def _minmax(values: np.ndarray) -> np.ndarray:
-    """Min-max normalise to [0, 1]; a (near) zero range gives zeros."""
+def _minmax(values: np.ndarray, weight: float = 1.0) -> np.ndarray:
+    """``weight`` times ``values`` min-max normalised to [0, 1]; a (near) zero range gives
+    zeros."""
     lo = values.min()
     span = values.max() - lo
     if not span > 1e-12 * max(1.0, abs(lo)):
         return np.zeros_like(values)
-    return (values - lo) / span
+    return (values - lo) * (weight / span)
 
 
 def connect_letters(
@@ -367,47 +368,62 @@ def connect_letters(
     start, first = prev[-1], nxt[0]
     m = nxt.shape[0]
     index_term = theta_o * np.arange(m, dtype=np.float64) / m
-
-    def reached(point: np.ndarray, target: np.ndarray) -> bool:
-        return float(np.hypot(*(target - point))) <= delta
-
+    target_x, target_y = np.ascontiguousarray(nxt[:, 0]), np.ascontiguousarray(nxt[:, 1])
+    first_x, first_y = float(first[0]), float(first[1])
     radius = delta / (2 * math.sin(alpha_max / 2))  # of the pen's tightest turn
     half_pi = math.pi / 2
-    pen = start.copy()
+    pen_x, pen_y = float(start[0]), float(start[1])
     homing = False
     heading = _initial_heading(prev, first)
-    path: list[np.ndarray] = []
-    joined = 0 if reached(pen, first) else -1
+    path: list[tuple[float, float]] = []
+    joined = 0 if math.hypot(first_x - pen_x, first_y - pen_y) <= delta else -1
     while joined < 0 and len(path) < max_steps:
-        homing = homing or float(np.hypot(*(first - pen))) < home_radius
-        targets = nxt[:1] if homing else nxt
-        to_targets = targets - pen  # (m, 2)
-        bearing = np.arctan2(to_targets[:, 1], to_targets[:, 0])
+        homing = homing or math.hypot(first_x - pen_x, first_y - pen_y) < home_radius
+        if homing:
+            # one candidate, the first point: its cost terms are all zero, so it is taken;
+            # the same step as below, in scalars (a third to a half of the steps)
+            wanted = (math.atan2(first_y - pen_y, first_x - pen_x) - heading + math.pi) % (
+                2 * math.pi
+            ) - math.pi
+            turn = min(max(wanted, -alpha_max), alpha_max)
+            if abs(wanted) > alpha_max:
+                arc = heading + turn / 2 + math.copysign(half_pi, wanted)
+                centre_x = pen_x + radius * math.cos(arc)
+                centre_y = pen_y + radius * math.sin(arc)
+                if math.hypot(first_x - centre_x, first_y - centre_y) < radius:
+                    turn = 0.0  # orbiting: go straight on
+            heading += turn
+            pen_x += delta * math.cos(heading)
+            pen_y += delta * math.sin(heading)
+            path.append((pen_x, pen_y))
+            if math.hypot(pen_x - first_x, pen_y - first_y) <= delta:
+                joined = 0
+            continue
+        to_x, to_y = target_x - pen_x, target_y - pen_y
+        bearing = np.arctan2(to_y, to_x)
         wanted = np.remainder(bearing - heading + np.pi, 2 * np.pi) - np.pi
-        turn = np.clip(wanted, -alpha_max, alpha_max)
-        # a target inside the turning circle on its side would be orbited: go straight on
-        side = np.sign(wanted) * half_pi
-        arc = heading + turn / 2 + side
-        centre_x = pen[0] + radius * np.cos(arc)
-        centre_y = pen[1] + radius * np.sin(arc)
-        orbit = (np.abs(wanted) > alpha_max) & (
-            np.hypot(targets[:, 0] - centre_x, targets[:, 1] - centre_y) < radius
-        )
-        turn = np.where(orbit, 0.0, turn)
+        turn = np.minimum(np.maximum(wanted, -alpha_max), alpha_max)
+        # a target inside the turning circle on its side would be orbited: go straight on.
+        # Only a target within the circle's diameter of the pen can be inside it.
+        near = np.flatnonzero((np.abs(wanted) > alpha_max) & (np.hypot(to_x, to_y) < 2 * radius))
+        if near.size:
+            arc = heading + turn[near] / 2 + np.sign(wanted[near]) * half_pi
+            centre_x = pen_x + radius * np.cos(arc)
+            centre_y = pen_y + radius * np.sin(arc)
+            orbit = np.hypot(target_x[near] - centre_x, target_y[near] - centre_y) < radius
+            turn[near[orbit]] = 0.0
         angles = heading + turn
-        cand_x = pen[0] + delta * np.cos(angles)  # (m,)
-        cand_y = pen[1] + delta * np.sin(angles)
-        dist_first = np.hypot(cand_x - first[0], cand_y - first[1])
-        dist_own = np.hypot(cand_x - targets[:, 0], cand_y - targets[:, 1])
-        cost = (
-            index_term[: targets.shape[0]]
-            + theta_a * _minmax(np.abs(turn))
-            + theta_f * _minmax(dist_first)
-            + theta_p * _minmax(dist_own)
-        )
+        cand_x = pen_x + delta * np.cos(angles)  # (m,)
+        cand_y = pen_y + delta * np.sin(angles)
+        dist_first = np.hypot(cand_x - first_x, cand_y - first_y)
+        dist_own = np.hypot(cand_x - target_x, cand_y - target_y)
+        np.abs(turn, out=turn)
+        cost = index_term + _minmax(turn, theta_a)
+        cost += _minmax(dist_first, theta_f)
+        cost += _minmax(dist_own, theta_p)
         j = int(np.argmin(cost))
-        pen, heading = np.array([cand_x[j], cand_y[j]]), float(angles[j])
-        path.append(pen)
+        pen_x, pen_y, heading = float(cand_x[j]), float(cand_y[j]), float(angles[j])
+        path.append((pen_x, pen_y))
         if dist_first[j] <= delta:
             joined = 0
         elif join == "retrace" and dist_own[j] <= delta:

@@ -836,9 +836,19 @@ def _banded_gram(phi: _FloatArray, start: _FloatArray, width: int) -> _FloatArra
             if rows.size and rows[-1] - rows[0] + 1 == rows.size:  # contiguous: a view
                 rows = slice(rows[0], rows[-1] + 1)
             block = phi[rows, lo:hi].T @ phi[rows, lo:far]  # gram[lo:hi, lo:far]
-        i, d = np.nonzero(np.add.outer(np.arange(hi - lo), np.arange(width)) < far - lo)
+        i, d = _band_entries(hi - lo, width, far - lo)
         banded[width - 1 - d, lo + i + d] = block[i, i + d]
     return banded
+
+
+@functools.lru_cache(maxsize=16)
+def _band_entries(rows: int, width: int, columns: int) -> tuple[_FloatArray, _FloatArray]:
+    """Row ``i`` and diagonal ``d`` of each entry ``(i, i + d)``, ``d < width``, of a ``rows`` x
+    ``columns`` block of a band (the same for every full block of :func:`_banded_gram`)."""
+    i, d = np.nonzero(np.add.outer(np.arange(rows), np.arange(width)) < columns)
+    i.setflags(write=False)
+    d.setflags(write=False)
+    return i, d
 
 
 def _dense(start: _FloatArray, values: _FloatArray, n_basis: int) -> _FloatArray:
@@ -852,6 +862,7 @@ def _dense(start: _FloatArray, values: _FloatArray, n_basis: int) -> _FloatArray
     return out
 
 
+@functools.lru_cache(maxsize=64)
 def _hold(
     stiffness: float, damping: float, step: float, points: int
 ) -> tuple[_FloatArray, _FloatArray]:
@@ -884,7 +895,10 @@ def _hold(
         nodes = np.arange(points, dtype=np.float64) - offset
         # Lagrange basis through the nodes: l_j(s) = sum_m inv(V)[m, j] s^m
         gains.append(moments @ np.linalg.inv(np.vander(nodes, points, increasing=True)))
-    return block[:2, :2], np.array(gains)
+    transition, gains = block[:2, :2].copy(), np.array(gains)
+    transition.setflags(write=False)  # cached (a rollout per word of the same length)
+    gains.setflags(write=False)
+    return transition, gains
 
 
 def _response(
