@@ -785,7 +785,7 @@ def test_prepacked_linear_map_matches_the_plain_one(monkeypatch, gelu):
     packed = whisper_decoder._LinearMap(weight, bias)
     monkeypatch.setattr(whisper_decoder, "_onednn_bfloat16", lambda: False)
     plain = whisper_decoder._LinearMap(weight, bias)
-    assert plain.packed is None
+    assert not plain.packed
     expected = torch.nn.functional.linear(x, weight, bias)
     expected = torch.nn.functional.gelu(expected) if gelu else expected
     for linear_map in (packed, plain):

@@ -405,7 +405,9 @@ def connect_letters(
         turn = np.minimum(np.maximum(wanted, -alpha_max), alpha_max)
         # a target inside the turning circle on its side would be orbited: go straight on.
         # Only a target within the circle's diameter of the pen can be inside it.
-        near = np.flatnonzero((np.abs(wanted) > alpha_max) & (np.hypot(to_x, to_y) < 2 * radius))
+        near = np.flatnonzero(
+            (np.abs(wanted) > alpha_max) & (np.hypot(to_x, to_y) < 2.000001 * radius)
+        )
         if near.size:
             arc = heading + turn[near] / 2 + np.sign(wanted[near]) * half_pi
             centre_x = pen_x + radius * np.cos(arc)
