@@ -310,7 +310,7 @@ def _initial_heading(prev: np.ndarray, towards: np.ndarray) -> float:
     return math.atan2(d[1], d[0])
 
 
-def _minmax(values: np.ndarray, weight: float = 1.0) -> np.ndarray:
+def _minmax(values: np.ndarray, weight: float) -> np.ndarray:
     """``weight`` times ``values`` min-max normalised to [0, 1]; a (near) zero range gives
     zeros."""
     lo = values.min()
