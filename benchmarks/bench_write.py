@@ -12,7 +12,7 @@ same run with two references:
   — ratio alg1 / straight is the price of the connection algorithm.
 
 It also reports the DMP's reproduction error (RMSE and max, mm, rollout against the timed
-demonstration) with the default settings (``conf/write.yaml``: 50 basis functions per 100
+demonstration) with the default settings (``conf/write.yaml``: 70 basis functions per 100
 samples at 100 samples/s). Target: median under 50 ms for 6 letters; RMSE under 0.1 mm.
 
 With ``--speech``, speech input end to end in a warm process, per recogniser setting (wav2vec2
