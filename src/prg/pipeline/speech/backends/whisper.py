@@ -25,7 +25,7 @@ favour prefixes such as "bell" over "belly"; ``Whisper.generate`` with the seque
 prefix steps through it one decoder call per token). Rescoring therefore runs CTranslate2's
 encoder, and Whisper's decoder in PyTorch on the same weights
 (:mod:`~prg.pipeline.speech.backends.whisper_decoder`): every variant of the words being scored
-in one batched pass. Words are scored best-bound first (a word's probability is at most that of
+in one pass over their prefix tree. Words are scored best-bound first (a word's probability is at most that of
 its variants' first tokens, read from one decoder step) until the best exact score reaches the
 next word's bound: the result is the exact argmax without scoring every word.
 """
