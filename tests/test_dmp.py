@@ -198,6 +198,16 @@ def test_rollout_matches_rk4_with_new_start_goal_tempo_and_few_samples(word_dmp)
     assert_allclose(out, rk4_reference(word_dmp, 300, substeps=30, **kwargs), rtol=0, atol=5e-5)
 
 
+def test_integrating_on_the_output_grid_is_close_and_the_default_finer_grid_closer(word):
+    # 0.7 basis functions per sample, as words are fitted (generate.basis_per_100_samples)
+    dense = fit_dmp(word, tau=3.0, n_basis=700)
+    reference = rk4_reference(dense, word.shape[0], substeps=30)
+    coarse = np.abs(rollout(dense, samples_per_basis=1) - reference).max()
+    default = np.abs(rollout(dense) - reference).max()
+    assert coarse < 5e-5  # cm: 1.4e-5 here
+    assert default < coarse / 10
+
+
 def test_the_banded_design_matrix_equals_the_dense_one():
     x = np.exp(-dmp_module.ALPHA_X * np.linspace(-0.2, 1.2, 2001))
     for n_basis in (1, 3, 25, 26, 60, 75, 200, 500):
@@ -321,6 +331,8 @@ def test_bad_fit_inputs_raise_value_error_naming_the_argument(points, kwargs, ma
         ({"tau": 0}, "tau: expected a number > 0"),
         ({"dt": -0.1}, "dt: expected a number > 0"),
         ({"dt": 0.1, "n_samples": 10}, "n_samples, dt: give one"),
+        ({"samples_per_basis": 0}, "samples_per_basis: expected an integer >= 1"),
+        ({"samples_per_basis": True}, "samples_per_basis: expected an integer >= 1"),
     ],
 )
 def test_bad_rollout_inputs_raise_value_error_naming_the_argument(word_dmp, kwargs, match):

@@ -105,6 +105,20 @@ def test_resample_keeps_a_tone_frequency():
     assert np.argmax(spectrum) == 440  # 1 s long: bin k is k Hz
 
 
+@pytest.mark.parametrize("dtype", [np.float32, np.float64, np.int16])
+@pytest.mark.parametrize("rate", [8_000, 22_050, 44_100])
+def test_resample_with_the_cached_filter_equals_scipys_own_design(rate, dtype):
+    from scipy.signal import resample_poly
+
+    x = (np.random.default_rng(rate).normal(size=rate // 3) * 1000).astype(dtype)
+    g = math.gcd(rate, SAMPLE_RATE)
+    expected = resample_poly(x, SAMPLE_RATE // g, rate // g)  # designs its filter each call
+    for _ in range(2):  # the second call uses the cached filter
+        out = resample(x, rate, SAMPLE_RATE)
+        assert out.dtype == expected.dtype
+        np.testing.assert_array_equal(out, expected)
+
+
 def test_resample_at_the_target_rate_is_identity():
     x = np.random.default_rng(0).normal(size=100)
     np.testing.assert_array_equal(resample(x, SAMPLE_RATE, SAMPLE_RATE), x)

@@ -7,6 +7,7 @@ not silent (RMS below ``min_rms_dbfs``), not longer than ``max_seconds``.
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 from collections.abc import Sequence
@@ -82,8 +83,25 @@ def resample(samples: np.ndarray, rate: int, target: int = SAMPLE_RATE) -> np.nd
         return np.asarray(samples)
     from scipy.signal import resample_poly
 
+    samples = np.asarray(samples)
     g = gcd(int(rate), int(target))
-    return resample_poly(samples, int(target) // g, int(rate) // g)
+    up, down = int(target) // g, int(rate) // g
+    floating = np.issubdtype(samples.dtype, np.floating)
+    taps = _lowpass(up, down, samples.dtype if floating else np.dtype(np.float64))
+    return resample_poly(samples, up, down, window=taps)
+
+
+@functools.lru_cache(maxsize=8)
+def _lowpass(up: int, down: int, dtype: np.dtype) -> np.ndarray:
+    """The anti-aliasing filter ``resample_poly`` designs by default for ``up / down`` (Kaiser
+    window, beta 5, 10 taps per phase of the larger factor), in the dtype it would use; cached:
+    designing it is most of a resampling's cost (0.8 of 1.1 ms for 22.05 to 16 kHz)."""
+    from scipy.signal import firwin
+
+    rate = max(up, down)
+    taps = firwin(2 * 10 * rate + 1, 1.0 / rate, window=("kaiser", 5.0)).astype(dtype)
+    taps.setflags(write=False)  # resample_poly copies it before scaling
+    return taps
 
 
 def rms_dbfs(samples: np.ndarray) -> float:
