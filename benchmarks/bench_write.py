@@ -18,8 +18,8 @@ samples at 100 samples/s). Target: median under 50 ms for 6 letters; RMSE under 
 With ``--speech``, speech input end to end in a warm process, per recogniser setting (wav2vec2
 has no real model offline), on the paper's words, for the first family: a ``Writer`` built once
 writes each espeak-ng file (``Writer.write(audio=...)``: read, recognise, letters, layout,
-connections, DMP rollout) against ``recognise`` alone on the same file, alternated; target
-ratio <= 1.2. An utterance the recogniser refuses (nothing heard) is timed up to the refusal.
+connections, DMP rollout) against ``recognise`` alone on the same file, alternated ``--reps``
+times (medians); target ratio <= 1.2. An utterance the recogniser refuses (nothing heard) is timed up to the refusal.
 
 Models: ``models/<family>/model.ckpt`` (``make demo``) when present, else the family built from
 ``conf/model`` with seeded random weights (speed does not depend on the weights; RMSE does).
@@ -197,7 +197,7 @@ def main() -> None:
                 flush=True,
             )
         if args.speech and family == args.families[0]:
-            speech += speech_rows(model, family, params, max(3, args.reps // 2))
+            speech += speech_rows(model, family, params, args.reps)
 
     print(
         f"\nWrite latency, label input -> DMP rollout, median of {args.reps} random words per "
