@@ -42,6 +42,11 @@ class SpeechSettings:
         Whisper rescoring with a slowdown: when the best word on the audio alone leads every
         other word by at least this many nats (natural-log probability), the slowed copy is not
         scored (>= 0; inf: always score both).
+    noise_subtraction : float
+        Whisper on the short window (rescoring, and free transcription of a word or two):
+        spectral subtraction before the encoder, for stationary noise (0 to 10; 0: off): this
+        many times the mean mel power of the audio's quietest frames is taken from every frame
+        (:func:`~prg.pipeline.speech.backends.whisper.subtract_noise`).
     case : {"lower", "upper", "title"}
         Case of the written word.
     max_seconds : float
@@ -61,6 +66,7 @@ class SpeechSettings:
     prior_weight: float = 0.4
     slowdown: float = 1.1
     view_margin: float = 2.0
+    noise_subtraction: float = 1.5
     case: str = "lower"
     max_seconds: float = 30.0
     min_rms_dbfs: float = -50.0
@@ -80,6 +86,10 @@ class SpeechSettings:
             raise UsageError(f"prior_weight must be between 0 and 1, got {self.prior_weight}")
         if not 1 <= self.slowdown <= 2:
             raise UsageError(f"slowdown must be between 1 and 2, got {self.slowdown}")
+        if not 0 <= self.noise_subtraction <= 10:
+            raise UsageError(
+                f"noise_subtraction must be between 0 and 10, got {self.noise_subtraction}"
+            )
         if not self.view_margin >= 0:
             raise UsageError(f"view_margin must be >= 0, got {self.view_margin}")
         if not (isinstance(self.beam_size, int) and self.beam_size >= 1):

@@ -59,6 +59,11 @@ _SHORT_NEW_TOKENS = 32  # free tokens after the prompt on the short window
 _HOTWORD_TOKENS = 223  # the lexicon prompt's limit, faster-whisper's (max_length // 2 - 1)
 # faster-whisper's defaults for dropping a segment as silence: probability of no speech above
 # 0.6 and mean token log-probability below -1
+NOISE_QUIET_FRACTION = 0.3  # the quietest frames of the audio, taken as its noise alone
+NOISE_FLOOR = 0.1  # spectral subtraction keeps at least this fraction of a bin's power
+_MIN_NOISE_FRAMES = 10  # fewer frames of audio than this: no noise estimate, no subtraction
+_HOP = 160  # Whisper's STFT: 25 ms windows every 10 ms at 16 kHz
+_N_FFT = 400
 _NO_SPEECH_PROB = 0.6
 _LOW_LOGPROB = -1.0
 
@@ -178,7 +183,7 @@ class WhisperRecogniser:
             hotwords = tok.encode(" " + " ".join(params.lexicon))[:_HOTWORD_TOKENS]
             prompt = [tok.sot_prev, *hotwords]
         prompt += [*tok.sot_sequence, tok.no_timestamps]
-        features = self._features(audio)
+        features = self._features(audio, params.noise_subtraction)
         frames = window_frames(features.shape[1], FREE_MIN_FRAMES)
         result = self.whisper.model.generate(
             ctranslate2.StorageView.from_array(self._encode([features], frames)),
@@ -223,16 +228,17 @@ class WhisperRecogniser:
             prior = params.prior_weight * self._silence_scores(
                 tuple(words), params.language, params.slowdown
             )
+        denoise, slowdown = params.noise_subtraction, params.slowdown
         if params.slowdown != 1 and not np.isfinite(params.view_margin):  # both views at once
-            memory, _ = self._memory([self._features(v) for v in views(audio, params.slowdown)])
+            memory, _ = self._memory([self._features(v, denoise) for v in views(audio, slowdown)])
             return self._best_first(memory, start, tok.eot, variants, prior.sum(axis=0), 0.0)[0]
-        features = self._features(audio)
+        features = self._features(audio, denoise)
         memory, frames = self._memory([features])
         margin = params.view_margin if params.slowdown != 1 else 0.0
         scores, lead, rank = self._best_first(memory, start, tok.eot, variants, prior[0], margin)
         if params.slowdown == 1 or lead >= margin:
             return scores
-        slowed = self._features(views(audio, params.slowdown)[1])
+        slowed = self._features(views(audio, params.slowdown)[1], denoise)
         if slowed.shape[1] <= frames:
             more, _ = self._memory([slowed], frames)
             memory = [
@@ -345,13 +351,62 @@ class WhisperRecogniser:
         ]
         return np.array(scores).T, logp[()]
 
-    def _features(self, audio: np.ndarray) -> np.ndarray:
+    def _features(self, audio: np.ndarray, noise_subtraction: float = 0.0) -> np.ndarray:
         """Log-mel features, shape (80, frames), of ``audio`` with RESCORE_PAD_S of silence
-        on both sides."""
+        on both sides; with ``noise_subtraction`` > 0, its stationary noise subtracted first
+        (:func:`subtract_noise`)."""
         pad = np.zeros(round(RESCORE_PAD_S * SAMPLE_RATE), dtype=np.float32)
-        return self.whisper.feature_extractor(
-            np.concatenate([pad, audio.astype(np.float32, copy=False), pad])
-        )
+        padded = np.concatenate([pad, audio.astype(np.float32, copy=False), pad])
+        extractor = self.whisper.feature_extractor
+        if not noise_subtraction:
+            return extractor(padded)
+        # the audio's own frames, away from the silence around it (a window spans 2.5 frames)
+        audio_frames = slice(len(pad) // _HOP + 2, (len(pad) + len(audio)) // _HOP - 2)
+        power = mel_power(padded, extractor.mel_filters)
+        return whisper_log_mel(subtract_noise(power, audio_frames, noise_subtraction))
+
+
+def mel_power(samples: np.ndarray, mel_filters: np.ndarray) -> np.ndarray:
+    """Whisper's mel power spectrogram (bands, frames) of 16 kHz ``samples``: a periodic Hann
+    window of 400 samples every 160, centred (reflected at the ends), the last frame dropped,
+    as faster-whisper's feature extractor computes it before taking logs (which
+    :func:`whisper_log_mel` then does)."""
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    waveform = np.pad(np.asarray(samples, dtype=np.float32), (0, _HOP))  # as faster-whisper
+    centred = np.pad(waveform, _N_FFT // 2, mode="reflect")
+    frames = sliding_window_view(centred, _N_FFT)[::_HOP]
+    window = np.hanning(_N_FFT + 1)[:-1].astype(np.float32)
+    spectrum = np.fft.rfft(frames * window, axis=-1).astype(np.complex64)
+    return mel_filters @ (np.abs(spectrum[:-1].T) ** 2)
+
+
+def whisper_log_mel(power: np.ndarray) -> np.ndarray:
+    """Whisper's normalised log-mel features of a mel power spectrogram: log10, at most 8
+    decades below the loudest bin, scaled as ``(x + 4) / 4``."""
+    log_spec = np.log10(np.clip(power, 1e-10, None))
+    log_spec = np.maximum(log_spec, log_spec.max() - 8.0)
+    return ((log_spec + 4.0) / 4.0).astype(np.float32)
+
+
+def subtract_noise(power: np.ndarray, audio_frames: slice, factor: float) -> np.ndarray:
+    """Spectral subtraction (Boll 1979, "Suppression of acoustic noise in speech using spectral
+    subtraction") on a mel power spectrogram (bands, frames), for stationary noise.
+
+    The noise is the mean power per band of the quietest NOISE_QUIET_FRACTION of the frames in
+    ``audio_frames`` (by total power: an isolated word leaves some of its recording to the
+    noise alone); ``factor`` times it is taken from every frame, which keeps at least
+    NOISE_FLOOR of its own power. With fewer than _MIN_NOISE_FRAMES frames, ``power`` is
+    returned as it is. Over-subtraction (``factor`` > 1) removes the noise's peaks above its
+    mean as well.
+    """
+    frames = power[:, audio_frames]
+    if frames.shape[1] < _MIN_NOISE_FRAMES:
+        return power
+    energy = frames.sum(axis=0)
+    quiet = energy <= np.quantile(energy, NOISE_QUIET_FRACTION)
+    noise = frames[:, quiet].mean(axis=1, keepdims=True)
+    return np.maximum(power - factor * noise, NOISE_FLOOR * power)
 
 
 def written_variants(tok, words: Sequence[str]) -> list[list[tuple[int, ...]]]:
