@@ -59,13 +59,13 @@ RESCORE_MIN_FRAMES = 300  # shortest encoder window when rescoring (3 s)
 SHORT_AUDIO_S = 2.0  # audio up to this long (a word or two) is transcribed on the short window
 _SHORT_NEW_TOKENS = 32  # free tokens after the prompt on the short window
 _HOTWORD_TOKENS = 223  # the lexicon prompt's limit, faster-whisper's (max_length // 2 - 1)
-# faster-whisper's defaults for dropping a segment as silence: probability of no speech above
-# 0.6 and mean token log-probability below -1
 NOISE_QUIET_FRACTION = 0.3  # the quietest frames of the audio, taken as its noise alone
 NOISE_FLOOR = 0.1  # spectral subtraction keeps at least this fraction of a bin's power
 _MIN_NOISE_FRAMES = 10  # fewer frames of audio than this: no noise estimate, no subtraction
 _HOP = 160  # Whisper's STFT: 25 ms windows every 10 ms at 16 kHz
 _N_FFT = 400
+# faster-whisper's defaults for dropping a segment as silence: probability of no speech above
+# 0.6 and mean token log-probability below -1
 _NO_SPEECH_PROB = 0.6
 _LOW_LOGPROB = -1.0
 
