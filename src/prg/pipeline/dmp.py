@@ -61,8 +61,9 @@ cubic through the four nearest samples (one matrix exponential), and the resulti
 recurrence is solved as one banded lower-triangular system (LAPACK ``tbtrs``, forward
 substitution, the same arithmetic as an all-pole ``lfilter``; ``scipy.signal`` itself costs a
 generating command half a second of import); there is no per-step Python loop. The only
-approximation is that cubic interpolation of ``u``; when fewer than ``SAMPLES_PER_BASIS`` output
-samples per basis function are asked for, the rollout runs on a finer grid and is subsampled. In
+approximation is that cubic interpolation of ``u``; when fewer than ``samples_per_basis``
+(default ``SAMPLES_PER_BASIS``) output samples per basis function are asked for, the rollout
+runs on a finer grid and is subsampled. In
 time ``t / tau`` the system does not depend on ``tau``, so changing the tempo only stretches time:
 the same number of samples gives the same path.
 

@@ -27,9 +27,9 @@ favour prefixes such as "bell" over "belly"; ``Whisper.generate`` with the seque
 prefix steps through it one decoder call per token). Rescoring therefore runs CTranslate2's
 encoder, and Whisper's decoder in PyTorch on the same weights
 (:mod:`~prg.pipeline.speech.backends.whisper_decoder`): every variant of the words being scored
-in one pass over their prefix tree. Words are scored best-bound first (a word's probability is at most that of
-its variants' first tokens, read from one decoder step) until the best exact score reaches the
-next word's bound: the result is the exact argmax without scoring every word.
+in one pass over their prefix tree. Words are scored best-bound first (a word's probability is
+at most that of its variants' first tokens, read from one decoder step) until the best exact
+score reaches the next word's bound: the result is the exact argmax without scoring every word.
 """
 
 from __future__ import annotations
@@ -231,16 +231,16 @@ class WhisperRecogniser:
                 tuple(words), params.language, params.slowdown
             )
         denoise, slowdown = params.noise_subtraction, params.slowdown
-        if params.slowdown != 1 and not np.isfinite(params.view_margin):  # both views at once
+        if slowdown != 1 and not np.isfinite(params.view_margin):  # both views at once
             memory, _ = self._memory([self._features(v, denoise) for v in views(audio, slowdown)])
             return self._best_first(memory, start, tok.eot, variants, prior.sum(axis=0), 0.0)[0]
         features = self._features(audio, denoise)
         memory, frames = self._memory([features])
-        margin = params.view_margin if params.slowdown != 1 else 0.0
+        margin = params.view_margin if slowdown != 1 else 0.0
         scores, lead, rank = self._best_first(memory, start, tok.eot, variants, prior[0], margin)
-        if params.slowdown == 1 or lead >= margin:
+        if slowdown == 1 or lead >= margin:
             return scores
-        slowed = self._features(views(audio, params.slowdown)[1], denoise)
+        slowed = self._features(views(audio, slowdown)[1], denoise)
         if slowed.shape[1] <= frames:
             more, _ = self._memory([slowed], frames)
             memory = [
@@ -359,20 +359,20 @@ class WhisperRecogniser:
         (:func:`subtract_noise`)."""
         pad = np.zeros(round(RESCORE_PAD_S * SAMPLE_RATE), dtype=np.float32)
         padded = np.concatenate([pad, audio.astype(np.float32, copy=False), pad])
-        extractor = self.whisper.feature_extractor
-        if not noise_subtraction:
-            return extractor(padded)
-        # the audio's own frames, away from the silence around it (a window spans 2.5 frames)
-        audio_frames = slice(len(pad) // _HOP + 2, (len(pad) + len(audio)) // _HOP - 2)
-        power = mel_power(padded, extractor.mel_filters)
-        return whisper_log_mel(subtract_noise(power, audio_frames, noise_subtraction))
+        power = mel_power(padded, self.whisper.feature_extractor.mel_filters)
+        if noise_subtraction:
+            # the audio's own frames, away from the silence around it (a window spans 2.5)
+            audio_frames = slice(len(pad) // _HOP + 2, (len(pad) + len(audio)) // _HOP - 2)
+            power = subtract_noise(power, audio_frames, noise_subtraction)
+        return whisper_log_mel(power)
 
 
 def mel_power(samples: np.ndarray, mel_filters: np.ndarray) -> np.ndarray:
     """Whisper's mel power spectrogram (bands, frames) of 16 kHz ``samples``: a periodic Hann
     window of 400 samples every 160, centred (reflected at the ends), the last frame dropped,
     as faster-whisper's feature extractor computes it before taking logs (which
-    :func:`whisper_log_mel` then does)."""
+    :func:`whisper_log_mel` then does; the two give its features, a test). Own code rather than
+    the extractor's call because spectral subtraction needs the power before the log."""
     from numpy.lib.stride_tricks import sliding_window_view
 
     waveform = np.pad(np.asarray(samples, dtype=np.float32), (0, _HOP))  # as faster-whisper
