@@ -40,7 +40,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from prg.errors import UsageError
-from prg.pipeline.speech.audio import SAMPLE_RATE
+from prg.pipeline.speech.audio import SAMPLE_RATE, resample
 from prg.pipeline.speech.backends.base import model_source, not_cached
 from prg.pipeline.speech.backends.packaged import BASE_NAME, whisper_base_folder
 from prg.pipeline.speech.backends.whisper_decoder import WhisperDecoder
@@ -435,12 +435,11 @@ def views(audio: np.ndarray, slowdown: float) -> list[np.ndarray]:
     """
     from fractions import Fraction
 
-    from scipy.signal import resample_poly
-
     if slowdown == 1:
         return [audio]
     ratio = Fraction(slowdown).limit_denominator(100)
-    slowed = resample_poly(audio, ratio.numerator, ratio.denominator).astype(np.float32)
+    # as if recorded at the denominator's rate and resampled to the numerator's
+    slowed = resample(audio, ratio.denominator, ratio.numerator).astype(np.float32)
     return [audio, slowed]
 
 
