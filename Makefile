@@ -89,7 +89,8 @@ format: setup ## Format and fix with ruff
 	$(BIN)/ruff check --fix src studies tests benchmarks
 
 # phi_S on voices and words nothing was tuned on: rescoring with one view, two, or as needed
-SPEECH_ONLY = --only whisper+rescore "whisper+rescore 1 view" "whisper+rescore 2 views"
+SPEECH_ONLY = --only whisper+rescore "whisper+rescore 1 view" "whisper+rescore 2 views" \
+	"whisper+rescore asks again"
 SPEECH_OTHER_VOICES = --clean en-gb-x-rp+m3:120 \
 	--hard en-gb-x-rp+m3:170 en-gb-scotland+f2:170 en+klatt4:175 $(SPEECH_ONLY)
 SPEECH_OTHER_WORDS = --clean en-gb-x-rp+m3:120 en-us+Andy:120 \

@@ -25,6 +25,11 @@ Each utterance is recognised with each configuration:
   (the default ``slowdown``);
 - ``whisper+rescore 1 view``: the same on the audio alone (``slowdown=1``);
 - ``whisper+rescore 2 views``: always both views (``view_margin=inf``);
+- ``whisper+rescore asks again``: the default rescoring with ``min_lead=ASK_AGAIN_LEAD`` (2
+  nats): when no lexicon word leads the others by that much it answers nothing and asks for
+  the word again (``UncertainWordError``); its accuracy counts those as not right, and the
+  JSON (and a line under the table) gives the fraction answered and how many of those were
+  right;
 - ``whisper-base`` and ``whisper-base+rescore``: the same with whisper base (multilingual), when
   ``--whisper-base`` (default: the model assembled by ``prg-speech-models base``) is available;
   otherwise listed as not measured, with the reason;
@@ -79,7 +84,7 @@ from pathlib import Path
 import numpy as np
 import soundfile
 
-from prg.errors import UsageError
+from prg.errors import UncertainWordError, UsageError
 from prg.files import write_json
 from prg.pipeline.speech import (
     DEFAULT_WAV2VEC2,
@@ -96,6 +101,7 @@ from prg.pipeline.speech.transcript import lexicon_key
 
 RESULTS = Path(__file__).parent / "results"
 BLOCK = 8  # utterances a configuration recognises in a row, after one untimed warm-up
+ASK_AGAIN_LEAD = 2.0  # speech.min_lead of "whisper+rescore asks again" (nats)
 REFERENCE = "whisper"
 WORDS = (
     "bell", "cat", "jump", "dog", "sun", "book", "tree", "fish", "milk", "red", "blue", "green",
@@ -207,6 +213,9 @@ def configurations(
         "whisper+rescore 2 views": SpeechSettings(
             lexicon=lexicon, rescore=True, view_margin=math.inf
         ),
+        "whisper+rescore asks again": SpeechSettings(
+            lexicon=lexicon, rescore=True, min_lead=ASK_AGAIN_LEAD
+        ),
     }
     if whisper_base is not None:
         configs["whisper-base"] = SpeechSettings(model=whisper_base)
@@ -254,26 +263,35 @@ def synthesise(words, voices, folder: Path, snr_db: float | None) -> list[tuple[
     return items
 
 
-def run_once(path: Path, params: SpeechSettings | Whisper30s | Moonshine) -> tuple[str, float]:
-    """(written word or "" when no usable transcript, seconds)."""
+def run_once(
+    path: Path, params: SpeechSettings | Whisper30s | Moonshine
+) -> tuple[str, float, bool]:
+    """(written word or "" when no usable transcript, seconds, whether the recogniser asked for
+    the word again: ``min_lead``)."""
     start = time.perf_counter()
+    asked_again = False
     try:
         if isinstance(params, Whisper30s | Moonshine):
             word = params.recognise(path)
         else:
             word = recognise(path, params).word
+    except UncertainWordError:
+        word, asked_again = "", True
     except UsageError as err:
         if "no letters or digits" not in str(err):
             raise
         word = ""
-    return word, time.perf_counter() - start
+    return word, time.perf_counter() - start, asked_again
 
 
 def summarise(records: list[dict]) -> dict:
     ms = [1000 * r["seconds"] for r in records]
+    answered = [r for r in records if not r["asked_again"]]
     return {
         "n": len(records),
         "accuracy": float(np.mean([r["correct"] for r in records])),
+        "answered": len(answered) / len(records),
+        "accuracy_answered": float(np.mean([r["correct"] for r in answered])) if answered else None,
         "ler": float(np.mean([r["ler"] for r in records])),
         "median_ms": statistics.median(ms),
         "p90_ms": float(np.percentile(ms, 90)),
@@ -346,7 +364,7 @@ def main() -> None:
                 params = configs[name]
                 run_once(block[0][3], params)  # warm: this recogniser's model back in the caches
                 for condition, word, voice, path in block:
-                    heard, seconds = run_once(path, params)
+                    heard, seconds, asked_again = run_once(path, params)
                     records[name].append(
                         {
                             "condition": condition,
@@ -356,6 +374,7 @@ def main() -> None:
                             "correct": heard == word,
                             "ler": letter_error_rate(heard, word) if heard else 1.0,
                             "seconds": seconds,
+                            "asked_again": asked_again,
                         }
                     )
             done = start + len(block)
@@ -401,6 +420,15 @@ def main() -> None:
             )
     for name, reason in not_measured.items():
         print(f"| {name} | not measured: {reason} |")
+    for name, s in summary.items():
+        for condition in conditions:
+            a = s[condition]
+            if a["answered"] < 1:
+                right = "n/a" if a["accuracy_answered"] is None else f"{a['accuracy_answered']:.1%}"
+                print(
+                    f"{name}, {condition}: answered {a['answered']:.1%} "
+                    f"(asked again for the rest), {right} of those right"
+                )
 
     report = {
         "machine": {

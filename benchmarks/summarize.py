@@ -297,11 +297,15 @@ def _speech(d: dict) -> list[Row]:
             if name == reference:
                 continue
             s = summary[condition]
+            accuracy = f"{s['accuracy']:.1%}"
+            if s.get("answered", 1) < 1:  # min_lead: asked again for the rest
+                answered = s["accuracy_answered"] or 0.0
+                accuracy += f", {answered:.1%} of the {s['answered']:.1%} answered"
             rows.append(
                 Row(
                     f"speech, {condition} ({said}; {', '.join(setting['voices'])}{noise}), {name} "
                     "(exact word; median latency, latency ratio)",
-                    f"{s['accuracy']:.1%} ({s['median_ms']:,.0f} ms, {s['latency_ratio']:.2f}x)",
+                    f"{accuracy} ({s['median_ms']:,.0f} ms, {s['latency_ratio']:.2f}x)",
                     f"{reference} alone",
                     f"{ref['accuracy']:.1%} ({ref['median_ms']:,.0f} ms)",
                     s["accuracy"] / ref["accuracy"] if ref["accuracy"] else math.nan,

@@ -13,6 +13,7 @@ import math
 import shutil
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +21,7 @@ import pytest
 import soundfile
 
 from prg.alphabet import text_to_labels
-from prg.errors import UsageError
+from prg.errors import UncertainWordError, UsageError
 from prg.pipeline.speech import (
     SAMPLE_RATE,
     SpeechSettings,
@@ -316,6 +317,9 @@ def test_params_store_the_lexicon_as_a_tuple_without_duplicates():
         ({"slowdown": math.nan}, "slowdown must be between 1 and 2"),
         ({"view_margin": -1}, "view_margin must be >= 0"),
         ({"view_margin": math.nan}, "view_margin must be >= 0"),
+        ({"min_lead": -0.5}, "min_lead must be >= 0 and finite"),
+        ({"min_lead": math.inf}, "min_lead must be >= 0 and finite"),
+        ({"min_lead": math.nan}, "min_lead must be >= 0 and finite"),
         ({"noise_subtraction": -0.5}, "noise_subtraction must be between 0 and 10"),
         ({"noise_subtraction": math.inf}, "noise_subtraction must be between 0 and 10"),
     ],
@@ -535,6 +539,54 @@ def test_whisper_rescoring_prunes_only_words_that_cannot_win(speech, whisper):
     assert scored.any()
     np.testing.assert_allclose(pruned[:3][scored], alone[scored], atol=1e-3)
     assert LEXICON[int(np.nanargmax(pruned))] == LEXICON[int(np.argmax(alone))] == "bell"
+
+
+@pytest.mark.parametrize("views", [{"slowdown": 1.0}, {"view_margin": math.inf}])
+def test_whisper_rescoring_shows_whether_the_best_leads_by_min_lead(speech, whisper, views):
+    """With min_lead under the best word's true lead, the best leads every scored word by it
+    and every unscored word is at least that far behind; above it, a scored rival is within
+    it. Exact scores: each word scored alone (the audio alone, or both views)."""
+    audio = load_audio(speech["bell"])
+    exact = np.array(
+        [whisper.score(audio, [w], SpeechSettings(lexicon=LEXICON, **views))[0] for w in LEXICON]
+    )
+    best = int(np.argmax(exact))
+    true_lead = float(exact[best] - np.sort(exact)[-2])
+    assert LEXICON[best] == "bell" and true_lead > 1
+    for min_lead, leads in ((true_lead - 0.5, True), (true_lead + 0.5, False)):
+        params = SpeechSettings(lexicon=LEXICON, min_lead=min_lead, **views)
+        pruned = whisper.score(audio, LEXICON, params)
+        scored = ~np.isnan(pruned)
+        # bfloat16 maps round a little differently with the rows batched with them
+        np.testing.assert_allclose(pruned[scored], exact[scored], atol=1e-2)
+        assert int(np.nanargmax(pruned)) == best
+        gap = pruned[best] - np.max(pruned[scored & (np.arange(len(LEXICON)) != best)])
+        assert (gap >= min_lead) == leads
+        if leads:
+            assert (exact[~scored] <= exact[best] - min_lead).all()
+
+
+def test_recognise_asks_again_when_no_word_leads_by_min_lead(speech, whisper):
+    """A clear word is answered under a min_lead below its lead over every other lexicon word,
+    and refused above it, in one line (a UsageError: exit 2 from the command line) naming the
+    best word and a rival within min_lead; the error carries the candidates."""
+    params = SpeechSettings(lexicon=LEXICON, rescore=True, slowdown=1)  # the audio alone
+    audio = load_audio(speech["bell"])
+    exact = np.array([whisper.score(audio, [w], params)[0] for w in LEXICON])
+    top, second = np.sort(exact)[::-1][:2]
+    lead = float(top - second)
+    assert LEXICON[int(np.argmax(exact))] == "bell" and lead > 1
+    assert recognise(speech["bell"], replace(params, min_lead=lead - 0.5)).word == "bell"
+    with pytest.raises(UncertainWordError) as unsure:
+        recognise(speech["bell"], replace(params, min_lead=lead + 0.5))
+    message = str(unsure.value)
+    rival, rival_score = unsure.value.candidates[1]
+    assert isinstance(unsure.value, UsageError) and "\n" not in message
+    assert f"not sure whether 'bell' or '{rival}' was said" in message
+    best_score = unsure.value.candidates[0][1]
+    assert best_score - rival_score < lead + 0.5
+    assert f"ahead by {best_score - rival_score:.2f} nats" in message
+    assert "say it again" in message
 
 
 def test_whisper_rescoring_prior_is_the_score_on_silence(speech, whisper):

@@ -12,7 +12,7 @@ from mlflow import MlflowClient
 
 from prg.commands.cli import compose_config
 from prg.commands.write import write
-from prg.errors import UsageError
+from prg.errors import UncertainWordError, UsageError
 from prg.pipeline.word import WordTrajectory
 from prg.recording import read_entities, read_times
 from prg.tracking import sqlite_uri
@@ -176,6 +176,7 @@ BAD = [
     (["audio={tmp}/silence.wav"], "silent"),
     (["audio={tmp}/silence.wav", "speech.backend=kaldi"], "speech backend 'kaldi' is unknown"),
     (["audio={tmp}/silence.wav", "speech.lexicon={tmp}/none.txt"], "not a readable word list"),
+    (["audio={tmp}/silence.wav", "speech.min_lead=-1"], "speech.min_lead"),
 ]
 
 
@@ -194,6 +195,24 @@ def test_bad_input_is_refused_in_one_line_and_writes_nothing(tmp_path, checkpoin
         write(cfg)
     assert expected in str(refused.value) and "\n" not in str(refused.value)
     assert not out.exists()
+
+
+def test_a_word_not_heard_clearly_enough_is_refused_in_one_line(tmp_path, checkpoint):
+    """speech.min_lead: when no lexicon word leads the others by it, nothing is written and
+    the one-line error asks the speaker to repeat (exit 2 from the command line)."""
+    wav = tmp_path / "jump.wav"
+    subprocess.run(["espeak-ng", "-v", "en+f3", "-s", "130", "-w", str(wav), "jump"], check=True)
+    out = tmp_path / "out"
+    speech = ["speech.lexicon=[bell,cat,jump]", "speech.rescore=true"]
+    common = [f"audio={wav}", *speech, f"ckpt={checkpoint}", "mlflow=false", "record=false"]
+    cfg = compose_config("write", [*common, "speech.min_lead=1000", f"out_dir={out}"])
+    with pytest.raises(UncertainWordError) as refused:
+        write(cfg)
+    message = str(refused.value)
+    assert "not sure whether 'jump' or" in message and "say it again" in message
+    assert "\n" not in message and not out.exists()
+    word, _ = write(compose_config("write", [*common, "speech.min_lead=1", f"out_dir={out}"]))
+    assert word.text == "jump"
 
 
 @pytest.mark.parametrize(

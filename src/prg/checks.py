@@ -274,6 +274,7 @@ RANGES: dict[str, Range] = {
     "speech.prior_weight": Range(0, 1),
     "speech.slowdown": Range(1, 2),
     "speech.view_margin": non_negative(1000),  # nats; 1000: always both views
+    "speech.min_lead": non_negative(1000),  # nats
     "speech.noise_subtraction": Range(0, 10),
     # prg-dictaphone
     "speed": Range(10, 1000),  # espeak-ng words per minute

@@ -38,6 +38,16 @@ class DataFormatError(UsageError):
         self.line = line
 
 
+class UncertainWordError(UsageError):
+    """Speech rescoring heard no lexicon word clearly enough (``speech.min_lead``): ask the
+    speaker to repeat. ``candidates`` holds the best lexicon words scored, with their scores,
+    best first (:attr:`prg.pipeline.speech.Transcript.candidates`)."""
+
+    def __init__(self, message: str, candidates: tuple[tuple[str, float], ...]):
+        super().__init__(message)
+        self.candidates = candidates
+
+
 class DownloadError(PRGError):
     """A download failed or its checksum did not match; nothing was written."""
 

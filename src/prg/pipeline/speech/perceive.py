@@ -9,7 +9,7 @@ import time
 import numpy as np
 
 from prg.alphabet import text_to_labels
-from prg.errors import UsageError
+from prg.errors import UncertainWordError, UsageError
 from prg.pipeline.speech.audio import SAMPLE_RATE, check_audio, load_audio
 from prg.pipeline.speech.backends import get_recogniser
 from prg.pipeline.speech.settings import SpeechSettings
@@ -51,6 +51,9 @@ def recognise(
 
     Raises
     ------
+    UncertainWordError
+        Rescoring: no lexicon word leads the others by ``params.min_lead`` (a
+        :class:`~prg.errors.UsageError`; ask the speaker to repeat).
     UsageError
         Unreadable/missing file, empty, silent or too long audio, a transcript with no usable
         letters, an unknown backend, a missing model or optional dependency.
@@ -77,6 +80,14 @@ def recognise(
             if np.isfinite(exact[i])
         )
         text = chosen = candidates[0][0]
+        if len(candidates) > 1 and candidates[0][1] - candidates[1][1] < params.min_lead:
+            (best, top), (second, runner_up) = candidates[:2]
+            raise UncertainWordError(
+                f"{name}: not sure whether {best!r} or {second!r} was said ({best!r} ahead by "
+                f"{top - runner_up:.2f} nats, under speech.min_lead={params.min_lead:g}); "
+                "say it again",
+                candidates,
+            )
     else:
         text = chosen = recogniser.transcribe(samples, params)
         if params.lexicon and lexicon_key(text):

@@ -42,6 +42,12 @@ class SpeechSettings:
         Whisper rescoring with a slowdown: when the best word on the audio alone leads every
         other word by at least this many nats (natural-log probability), the slowed copy is not
         scored (>= 0; inf: always score both).
+    min_lead : float
+        Rescoring: answer only when the chosen word is ahead of every other lexicon word by at
+        least this many nats (>= 0; 0: always answer); otherwise :func:`recognise` raises
+        :class:`~prg.errors.UncertainWordError`, naming the best word and a rival within
+        ``min_lead`` of it, so that a robot can ask the speaker to repeat instead of writing a
+        word it is unsure of.
     noise_subtraction : float
         Whisper on the short window (rescoring, and free transcription of a word or two):
         spectral subtraction before the encoder, for stationary noise (0 to 10; 0: off): this
@@ -66,6 +72,7 @@ class SpeechSettings:
     prior_weight: float = 0.4
     slowdown: float = 1.1
     view_margin: float = 2.0
+    min_lead: float = 0.0
     noise_subtraction: float = 1.5
     case: str = "lower"
     max_seconds: float = 30.0
@@ -92,6 +99,8 @@ class SpeechSettings:
             )
         if not self.view_margin >= 0:
             raise UsageError(f"view_margin must be >= 0, got {self.view_margin}")
+        if not 0 <= self.min_lead < math.inf:
+            raise UsageError(f"min_lead must be >= 0 and finite, got {self.min_lead}")
         if not (isinstance(self.beam_size, int) and self.beam_size >= 1):
             raise UsageError(f"beam_size must be an integer >= 1, got {self.beam_size!r}")
         if self.lexicon is not None:

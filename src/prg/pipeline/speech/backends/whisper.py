@@ -218,7 +218,10 @@ class WhisperRecogniser:
         scores. With an infinite margin both views are encoded and scored at once.
 
         Scores are computed best-bound first (:meth:`_best_first`): the best word is the exact
-        argmax, and words that cannot win are left unscored (NaN).
+        argmax, and words that cannot win are left unscored (NaN). With ``params.min_lead`` >
+        0, scoring goes on until the best word's bound lead over every unscored word is
+        ``min_lead`` or a scored word comes within ``min_lead`` of it: the scores then show
+        whether the best leads every other word by ``min_lead``.
         """
         import torch
 
@@ -230,16 +233,24 @@ class WhisperRecogniser:
             prior = params.prior_weight * self._silence_scores(
                 tuple(words), params.language, params.slowdown
             )
-        denoise, slowdown = params.noise_subtraction, params.slowdown
+        denoise, slowdown, min_lead = params.noise_subtraction, params.slowdown, params.min_lead
         if slowdown != 1 and not np.isfinite(params.view_margin):  # both views at once
             memory, _ = self._memory([self._features(v, denoise) for v in views(audio, slowdown)])
-            return self._best_first(memory, start, tok.eot, variants, prior.sum(axis=0), 0.0)[0]
+            summed = prior.sum(axis=0)
+            return self._best_first(memory, start, tok.eot, variants, summed, min_lead)[0]
         features = self._features(audio, denoise)
         memory, frames = self._memory([features])
-        margin = params.view_margin if slowdown != 1 else 0.0
-        scores, lead, rank = self._best_first(memory, start, tok.eot, variants, prior[0], margin)
-        if slowdown == 1 or lead >= margin:
-            return scores
+        if slowdown == 1:
+            return self._best_first(memory, start, tok.eot, variants, prior[0], min_lead)[0]
+        scores, lead, rank = self._best_first(
+            memory, start, tok.eot, variants, prior[0], params.view_margin, settle=False
+        )
+        if lead >= params.view_margin:  # the audio alone decides
+            if lead >= min_lead:
+                return scores
+            # scored on until its best leads by min_lead or another word comes within it
+            order = np.argsort(-rank, kind="stable")
+            return self._best_first(memory, start, tok.eot, variants, prior[0], min_lead, order)[0]
         slowed = self._features(views(audio, slowdown)[1], denoise)
         if slowed.shape[1] <= frames:
             more, _ = self._memory([slowed], frames)
@@ -251,9 +262,12 @@ class WhisperRecogniser:
             memory, _ = self._memory([features, slowed])
         # ranked by the audio alone's scores and bounds: no ranking pass
         order = np.argsort(-rank, kind="stable")
-        return self._best_first(memory, start, tok.eot, variants, prior.sum(axis=0), 0.0, order)[0]
+        summed = prior.sum(axis=0)
+        return self._best_first(memory, start, tok.eot, variants, summed, min_lead, order)[0]
 
-    def _best_first(self, memory, start, eot, variants, prior, margin: float, order=None):
+    def _best_first(
+        self, memory, start, eot, variants, prior, margin: float, order=None, settle=True
+    ):
         """Scores (:meth:`_exact` summed over the views in ``memory``, minus ``prior``) of the
         words best-bound first; the best word's proven lead over every other word; and each
         word's exact score or, if unscored, its bound.
@@ -264,9 +278,12 @@ class WhisperRecogniser:
         normaliser, the same for every word, does not change the ranking), unless ``order``
         gives the ranking, then scored in rank order, in growing batches, until the best exact
         score leads the next unscored word's (exact) bound by ``margin``, or a scored word comes
-        within ``margin`` of the best. With margin 0 the best word is the exact argmax; the
-        lead is the best score minus the highest other exact score or unscored bound (a lower
-        bound on its true lead).
+        within ``margin`` of the best and (with ``settle``) the best leads every unscored
+        word's bound. With ``settle`` the best word is the exact argmax, and it leads every
+        other word by ``margin`` unless a scored word is within ``margin`` of it; without, the
+        search stops at the first scored word within ``margin`` (a doubt is all the caller
+        needs). The lead is the best score minus the highest other exact score or unscored
+        bound (a lower bound on its true lead).
         """
         firsts = [sorted({v[0] for v in vs}) for vs in variants]
         if order is None:
@@ -287,7 +304,8 @@ class WhisperRecogniser:
             others = np.sort(scores[~np.isnan(scores)])[:-1]
             rival = others[-1] if len(others) else -np.inf
             nxt = bounds[order[done]] if done < len(order) else -np.inf
-            if done >= len(order) or best >= nxt + margin or rival > best - margin:
+            near = rival > best - margin and (best >= nxt or not settle)
+            if done >= len(order) or best >= nxt + margin or near:
                 break
         return scores, best - max(rival, nxt), np.where(np.isnan(scores), bounds, scores)
 
