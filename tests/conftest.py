@@ -46,8 +46,28 @@ def untrained_muse_checkpoint(tmp_path_factory) -> Path:
     torch.manual_seed(0)
     module = PRGModule(model=node["model"], optimizer=node["optimizer"])
     path = tmp_path_factory.mktemp("ckpt") / "muse.ckpt"
-    torch.save({"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams)}, path)
+    ckpt = {"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams)}
+    ckpt["hands"] = stand_in_hands().to_checkpoint()  # as training keeps its writers' letters
+    torch.save(ckpt, path)
     return path
+
+
+def stand_in_hands(n_writers: int = 3, seed: int = 0):
+    """A :class:`~prg.data.hands.HandBank` of random letter-like strokes: every class written
+    once by each of ``n_writers`` writers (plumbing, not handwriting)."""
+    from prg.alphabet import NUM_CLASSES
+    from prg.data.hands import HandBank
+    from prg.pipeline.perceive import perceive_trajectories
+
+    rng = np.random.default_rng(seed)
+    n = n_writers * NUM_CLASSES
+    traj = perceive_trajectories([letter_like(rng) for _ in range(n)], y_down=True)
+    return HandBank(
+        traj=traj,
+        label=np.tile(np.arange(NUM_CLASSES), n_writers),
+        writer=np.repeat(np.arange(n_writers), NUM_CLASSES),
+        writers=tuple(f"w{i}" for i in range(n_writers)),
+    )
 
 
 @pytest.fixture(scope="session")

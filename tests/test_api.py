@@ -6,7 +6,9 @@ import re
 import sys
 
 import numpy as np
+import pytest
 
+from prg.alphabet import char_to_label
 from prg.pipeline.word import WordTrajectory
 from tests.conftest import REPO
 
@@ -100,13 +102,16 @@ def test_a_warm_writer_decodes_each_label_once_and_gives_the_same_letters(
     from dataclasses import replace
 
     from prg import Writer
+    from prg.pipeline.compose import GenerateSettings
     from prg.pipeline.decode import decode_letters, label_inputs
 
-    writer = Writer.from_checkpoint(untrained_muse_checkpoint)
+    posterior = GenerateSettings(mode="posterior")
+    writer = Writer.from_checkpoint(untrained_muse_checkpoint, settings=posterior)
     cat = writer.write(text="cat").letters
     act = writer.write(text="act").letters
     np.testing.assert_array_equal(act, cat[[1, 0, 2]])  # the same arrays, reused
-    fresh = Writer.from_checkpoint(untrained_muse_checkpoint).write(text="act").letters
+    fresh = Writer.from_checkpoint(untrained_muse_checkpoint, settings=posterior)
+    fresh = fresh.write(text="act").letters
     np.testing.assert_allclose(act, fresh, atol=1e-5)
     s = writer.settings
     alone = decode_letters(writer.model, label_inputs("act"), 0.0, s.seed, s.impute_steps)
@@ -115,3 +120,55 @@ def test_a_warm_writer_decodes_each_label_once_and_gives_the_same_letters(
     sampled = writer.write(text="cat").letters
     writer.settings = replace(s, temperature=1.0, seed=2)
     assert np.abs(writer.write(text="cat").letters - sampled).max() > 1e-3
+
+
+def test_a_seed_is_one_hand_another_seed_another(untrained_muse_checkpoint):
+    """The default hand mode: one seed writes the same word twice; another seed writes it in
+    another writer's hand; the letters of a word come from one writer's letters."""
+    from prg import Writer
+    from prg.pipeline.compose import GenerateSettings
+    from prg.pipeline.hands import components, random_hand
+
+    def letters(seed, text="abcab"):
+        settings = GenerateSettings(seed=seed)
+        return Writer.from_checkpoint(untrained_muse_checkpoint, settings=settings).write(text=text)
+
+    first = letters(3)
+    np.testing.assert_array_equal(first.letters, letters(3).letters)
+    # an untrained decoder moves little with its input: any difference is another hand
+    assert np.abs(first.letters - letters(4).letters).mean() > 1e-5
+    bank = Writer.from_checkpoint(untrained_muse_checkpoint).hands
+    labels = np.array([char_to_label(c) for c in "abcab"])
+    chosen = components(bank, random_hand(bank, 3), labels, 3)
+    writer = random_hand(bank, 3).writer
+    mine = bank.traj[bank.writer == writer]
+    assert all(any(np.array_equal(row, m) for m in mine) for row in chosen)
+
+
+def test_a_style_writes_the_persons_own_letters_for_the_classes_they_gave(
+    untrained_muse_checkpoint,
+):
+    from prg import Writer
+    from prg.pipeline.compose import GenerateSettings
+    from prg.pipeline.hands import decode_in_hand
+
+    writer = Writer.from_checkpoint(untrained_muse_checkpoint)
+    own = writer.hands.traj[:2] * 0.5  # a person's "a" and "b", unlike any bank letter
+    settings = GenerateSettings(hand_temperature=0.0)
+    styled = Writer.from_checkpoint(
+        untrained_muse_checkpoint, settings=settings, style=(own, "ab")
+    ).write(text="ba")
+    labels = np.array([char_to_label("b"), char_to_label("a")])
+    expected = decode_in_hand(writer.model, own[[1, 0]], labels, 0.0, settings.seed)
+    np.testing.assert_allclose(styled.letters, expected, atol=1e-6)
+
+
+def test_a_model_without_hands_says_how_to_write_without_them():
+    from prg import Writer
+    from prg.errors import UsageError
+    from prg.models.muse import MUSE
+    from prg.pipeline.compose import GenerateSettings
+
+    with pytest.raises(UsageError, match=r"generate\.mode=posterior"):
+        Writer(MUSE()).write(text="ab")
+    assert Writer(MUSE(), GenerateSettings(mode="posterior")).write(text="ab").text == "ab"

@@ -14,6 +14,7 @@ from prg.pipeline.compose import GenerateSettings, clean_text
 from prg.pipeline.decode import decode_letters, infer_text, label_inputs, usable_inputs
 from prg.pipeline.timing import rest_to_rest_samples
 from prg.writer import Perception, Writer
+from tests.conftest import stand_in_hands
 
 
 def _inputs(n: int) -> dict[str, torch.Tensor]:
@@ -71,7 +72,7 @@ def test_rest_to_rest_timing_keeps_the_path_and_the_mean_speed():
 
 def test_a_word_is_laid_out_connected_and_reproduced_by_one_dmp():
     torch.manual_seed(0)
-    writer = Writer(MUSE(), GenerateSettings(samples_per_s=150))
+    writer = Writer(MUSE(), GenerateSettings(samples_per_s=150), hands=stand_in_hands())
     result = writer.generate(Perception("ab cd", label_inputs("ab cd")))
     word, path = result.word, result.rollout
     assert [c for c, _ in word.letters] == list("abcd")

@@ -16,6 +16,7 @@ import torch
 
 from prg.errors import UsageError
 from prg.models.muse import MUSE
+from prg.pipeline.compose import GenerateSettings
 from prg.pipeline.decode import decode_letters, label_inputs
 from prg.recording import (
     distinct_colours,
@@ -59,7 +60,7 @@ def written(tmp_path_factory):
     torch.manual_seed(0)
     model = MUSE().eval()
     inputs = label_inputs(TEXT)
-    result = Writer(model).generate(Perception(TEXT, inputs))
+    result = Writer(model, GenerateSettings(mode="posterior")).generate(Perception(TEXT, inputs))
     word, rollout = result.word, result.rollout
     letters = decode_letters(model, inputs)
     images = np.random.default_rng(0).random((4, 1, 28, 28)).astype(np.float32)

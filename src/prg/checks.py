@@ -107,6 +107,7 @@ TEMPERATURE = non_negative(TEMPERATURE_MAX)
 
 # ---- the fields of library settings classes (each validates itself with its own table) ----
 GENERATE_RANGES: dict[str, Range] = {  # prg.pipeline.compose.GenerateSettings
+    "hand_temperature": TEMPERATURE,
     "temperature": TEMPERATURE,
     "seed": SEED,
     "impute_steps": count(0, 1000),
@@ -141,6 +142,13 @@ CLASSIFIER_RANGES: dict[str, Range] = {  # prg.evaluation.settings.ClassifierSet
     "batch_size": count(1, 1_000_000),
     "lr": positive(10),
     "seed": SEED,
+}
+LIKENESS_RANGES: dict[str, Range] = {  # prg.evaluation.settings.LikenessSettings
+    "n_per_class": count(4, 1000),  # the k-NN measures need more than k = 3 letters a class
+}
+STYLE_RANGES: dict[str, Range] = {  # prg.evaluation.settings.StyleSettings
+    "n_eval": count(1, 61),  # classes set aside: the rest train the writer classifier
+    "temperature": TEMPERATURE,
 }
 EVALUATION_RANGES: dict[str, Range] = {  # prg.evaluation.settings.EvaluationSettings
     "seed": SEED,
@@ -261,6 +269,8 @@ RANGES: dict[str, Range] = {
     "coherence.temperatures.*": TEMPERATURE,
     "coherence.image_shifts": IMAGE_SHIFT,
     **_under("classifier", CLASSIFIER_RANGES),
+    **_under("likeness", LIKENESS_RANGES),
+    **_under("styles", STYLE_RANGES),
     # prg-write (and prg-dictaphone, prg-simulate, which run it)
     "layout.*": positive(100),  # cm, or fractions of the letter height
     "connection.delta": positive(10),

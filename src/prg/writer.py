@@ -28,14 +28,31 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import torch
 
+from prg.alphabet import text_to_labels
 from prg.checks import check_text_length
+from prg.data.hands import HandBank
 from prg.errors import UsageError
 from prg.files import staged_outputs
 from prg.models.base import MultimodalVAE
 from prg.models.checkpoint import load_model
 from prg.models.modalities import IMAGE, LABEL, TRAJ
 from prg.pipeline.compose import GenerateSettings, clean_text, compose_word
-from prg.pipeline.decode import check_inputs, decode_letters, infer_text, label_inputs
+from prg.pipeline.decode import (
+    check_inputs,
+    decode_letters,
+    infer_text,
+    label_inputs,
+    usable_inputs,
+)
+from prg.pipeline.hands import (
+    Hand,
+    components,
+    decode_in_hand,
+    match_hand,
+    nearest_components,
+    random_hand,
+    read_style,
+)
 from prg.pipeline.perceive import (
     perceive_letter_images,
     perceive_trajectories,
@@ -212,6 +229,15 @@ class Writer:
         The speech recogniser for ``audio=``.
     on_unknown : {"error", "skip"}
         Characters outside 0-9, A-Z, a-z in a typed or heard text: one error, or dropped.
+    hands : HandBank, optional
+        The training writers' letters (a checkpoint's, :meth:`from_checkpoint`): what the
+        default ``hand`` decoding draws letters from (:mod:`prg.pipeline.hands`).
+    style : path or (trajectories, text), optional
+        A person's letters to write in their hand: a style file (:func:`read_style`: a
+        capture-page recording, a UJI-format file or an ``.npz``) or their normalised
+        trajectories ``(k, 200)`` and their ``k`` letters. Every word is then written in that
+        hand: the person's own letters for the classes they gave, the nearest training
+        writer's for the rest.
     """
 
     def __init__(
@@ -220,12 +246,18 @@ class Writer:
         settings: GenerateSettings | None = None,
         speech: SpeechSettings | None = None,
         on_unknown: str = "error",
+        hands: HandBank | None = None,
+        style: str | os.PathLike | tuple[np.ndarray, str] | None = None,
     ):
         _check_on_unknown(on_unknown)
         self.model = model.eval()
         self.settings = settings or GenerateSettings()
         self.speech = speech or SpeechSettings()
         self.on_unknown = on_unknown
+        self.hands = hands
+        self.hand: Hand | None = None
+        if style is not None:
+            self.hand = match_hand(self._bank("style="), *_style_letters(style))
         # letter trajectories decoded from a label alone, by (label, impute_steps): see _decode
         self._label_letters: dict[tuple[int, int], np.ndarray] = {}
 
@@ -234,8 +266,18 @@ class Writer:
         """A writer with the model of the checkpoint ``path`` (``models/<family>/model.ckpt``, or
         a training checkpoint); ``kwargs`` as :class:`Writer`."""
         _check_on_unknown(kwargs.get("on_unknown", "error"))  # before the model loads
-        model, _ = load_model(path)
+        model, info = load_model(path)
+        kwargs.setdefault("hands", info.get("hands"))
         return cls(model, **kwargs)
+
+    def _bank(self, wanted: str) -> HandBank:
+        if self.hands is None:
+            raise UsageError(
+                f"{wanted} needs the training writers' letters, which this model's checkpoint "
+                "lacks (saved before they were kept): retrain it, or write with "
+                "generate.mode=posterior"
+            )
+        return self.hands
 
     @property
     def family(self) -> str:
@@ -341,7 +383,7 @@ class Writer:
         check_inputs(perception.text, perception.inputs)
         settings = self.settings
         start = time.perf_counter()
-        letters = self._decode(perception.inputs)
+        letters = self._decode(perception.inputs, perception.text)
         decoded = time.perf_counter()
         word, rollout = compose_word(letters, perception.text, settings)
         composed = time.perf_counter()
@@ -353,7 +395,27 @@ class Writer:
         timings["total"] = sum(timings.values())
         return WriteResult(perception, settings, self.family, letters, word, rollout, timings)
 
-    def _decode(self, inputs: dict[str, torch.Tensor]) -> np.ndarray:
+    def _decode(self, inputs: dict[str, torch.Tensor], text: str) -> np.ndarray:
+        """One trajectory per letter: in a hand (:func:`decode_in_hand`), or decoded from the
+        command's posterior (:func:`decode_letters`)."""
+        settings = self.settings
+        if settings.mode == "posterior":
+            return self._decode_posterior(inputs)
+        bank = self._bank("generate.mode=hand")
+        labels = np.asarray(text_to_labels(text.replace(" ", "")), dtype=np.int64)
+        shown = {m: x for m, x in inputs.items() if m != LABEL}
+        if shown and self.hand is None:  # letters shown as images or pen strokes keep their shape
+            usable = usable_inputs(self.model, inputs)
+            if set(usable) != {LABEL}:
+                chosen = nearest_components(self.model, bank, usable, labels)
+                return decode_in_hand(
+                    self.model, chosen, labels, settings.hand_temperature, settings.seed
+                )
+        hand = self.hand or random_hand(bank, settings.seed)
+        chosen = components(bank, hand, labels, settings.seed)
+        return decode_in_hand(self.model, chosen, labels, settings.hand_temperature, settings.seed)
+
+    def _decode_posterior(self, inputs: dict[str, torch.Tensor]) -> np.ndarray:
         """One trajectory per letter (:func:`decode_letters`).
 
         A letter given by its label alone and decoded at temperature 0 is a function of the
@@ -388,6 +450,22 @@ class Writer:
 def _check_on_unknown(on_unknown: str) -> None:
     if on_unknown not in ("error", "skip"):
         raise UsageError(f"on_unknown {on_unknown!r}: choose error or skip")
+
+
+def _style_letters(
+    style: str | os.PathLike | tuple[np.ndarray, str],
+) -> tuple[np.ndarray, np.ndarray]:
+    """A style's normalised trajectories and classes: from a file, or given as arrays."""
+    if isinstance(style, str | os.PathLike):
+        return read_style(style)
+    traj, letters = style
+    traj = np.asarray(traj, dtype=np.float32)
+    if traj.ndim != 2 or traj.shape[1] != 200 or len(traj) != len(letters) or not len(traj):
+        raise UsageError(
+            f"style: {traj.shape} trajectories for {len(letters)} letters; accepted are "
+            "(k, 200) normalised trajectories and their k letters, k >= 1"
+        )
+    return traj, np.asarray(text_to_labels(letters), dtype=np.int64)
 
 
 def image_inputs(images: PathOrImages) -> torch.Tensor:

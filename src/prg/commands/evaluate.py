@@ -43,6 +43,8 @@ from prg.evaluation.settings import (
     CoherenceSettings,
     EvaluationSettings,
     LikelihoodSettings,
+    LikenessSettings,
+    StyleSettings,
 )
 from prg.files import staged_outputs, write_json, write_text
 from prg.resources import git_commit
@@ -69,6 +71,8 @@ def evaluation_settings(cfg: DictConfig) -> EvaluationSettings:
         likelihood=build(LikelihoodSettings, node(cfg, "likelihood"), "likelihood"),
         coherence=build(CoherenceSettings, node(cfg, "coherence"), "coherence"),
         classifier=build(ClassifierSettings, classifier, "classifier"),
+        likeness=build(LikenessSettings, node(cfg, "likeness"), "likeness"),
+        styles=build(StyleSettings, node(cfg, "styles"), "styles"),
     )
 
 

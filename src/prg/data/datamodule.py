@@ -140,6 +140,7 @@ class PRGDataModule(L.LightningDataModule):
         self.pin_memory = pin_memory
         self.seed = seed
         self.datasets: dict[str, ModalityDataset] = {}
+        self.train_letters: dict[str, np.ndarray] | None = None
 
     @property
     def manifest(self) -> dict[str, Any]:
@@ -160,6 +161,10 @@ class PRGDataModule(L.LightningDataModule):
                         f"(data.splits.{split} > 0 when the dataset is prepared)"
                     )
                 self.datasets[split] = ModalityDataset(arrays, self.modalities)
+                if split == "train":  # the writers' letters a checkpoint keeps (prg.pipeline.hands)
+                    self.train_letters = {
+                        k: arrays[k] for k in ("traj", "label", "writer", "augmented")
+                    }
 
     def _loader(self, split: str, shuffle: bool) -> DataLoader:
         if split not in self.datasets:

@@ -22,6 +22,8 @@ from prg.evaluation.likelihood import (
     TABLE1_CELLS,
     density_convention,
 )
+from prg.evaluation.modes import LIKENESS_MEASURES
+from prg.evaluation.styles import style_summary
 from prg.models.modalities import LABEL, LETTER, NAMES, TRAJ, letters
 
 if TYPE_CHECKING:
@@ -398,7 +400,88 @@ def report_texts(
         )
         texts["plots/robustness.csv"] = robustness_plot_csv(result.coherence, kind)
         texts["plots/coherence_per_class.csv"] = per_class_plot_csv(result.per_class, kind)
+    if "likeness" in settings.parts:
+        texts["likeness.csv"] = to_csv(result.likeness, LIKENESS_COLUMNS)
+        texts["likeness.md"] = likeness_markdown(result.likeness, settings)
+        texts["plots/likeness.csv"] = to_csv(
+            [{**r, "row": f"{r['family']} {r['mode']}"} for r in result.likeness],
+            ["row", *LIKENESS_MEASURES],
+        )
+    if "styles" in settings.parts:
+        texts["styles.csv"] = to_csv(result.styles, STYLE_COLUMNS)
+        texts["styles.md"] = styles_markdown(result.styles, settings)
     return texts
+
+
+LIKENESS_COLUMNS = ("family", "mode", *LIKENESS_MEASURES, "classes")
+STYLE_COLUMNS = ("family", "seed", "k", "generated", "real", "chance", "writers", "letters")
+
+
+def likeness_markdown(rows: list[dict], settings: EvaluationSettings) -> str:
+    """The likeness table: reference rows first, then each family's modes."""
+    n = settings.likeness.n_per_class
+    body = [
+        [
+            "real letters" if r["family"] == "real" else title(r["family"]),
+            f"**{r['mode']}**" if "default" in r["mode"] else r["mode"],
+            *(f"{r[m]:.2f}" for m in LIKENESS_MEASURES),
+        ]
+        for r in rows
+    ]
+    return "\n".join(
+        [
+            "# Likeness: generated letters against held-out writers' letters",
+            "",
+            f"{n} letters per class generated from their labels (or drawn from a reference "
+            "split), compared class by class with the test split's letters (writers no model "
+            "saw) in the normalised 200-d trajectory space, and averaged over the classes. "
+            "legible: read as their class by the project's trajectory classifier, shape twins "
+            "folded; precision / recall: k-NN (k = 3) precision and recall of Kynkäänniemi et "
+            "al. 2019; c2st: cross-validated accuracy of a linear classifier telling them from "
+            "the real letters (0.5: indistinguishable); spread: median within-class distance, "
+            "generated over real (1: as varied as writers). **mean (paper)** is the paper's "
+            "decoding; **hand (default)** writes each letter from a real writer's letter "
+            "posterior (prg.pipeline.hands). Seed "
+            f"{settings.seed}.",
+            "",
+            _md_table(["family", "mode", *LIKENESS_MEASURES], body),
+            "",
+        ]
+    )
+
+
+def styles_markdown(rows: list[dict], settings: EvaluationSettings) -> str:
+    """The style table: per family and k, the writer-identification rates over seeds."""
+    s = settings.styles
+    body = [
+        [
+            title(r["family"]),
+            str(r["k"]),
+            f"{r['generated']:.2f} ± {r['generated_sd']:.2f}",
+            f"{r['real']:.2f}",
+            f"{r['ratio']:.2f}",
+            f"{r['chance']:.2f}",
+        ]
+        for r in style_summary(rows)
+    ]
+    return "\n".join(
+        [
+            "# Style: writing in a held-out writer's hand from k of their letters",
+            "",
+            f"For each of {len(s.seeds)} seeds, {s.n_eval} letter classes are set aside; a "
+            "writer-identification classifier (hand features centred per class, linear) is "
+            "trained on the test writers' real letters of the other classes; for each writer, "
+            "k of their letters (other classes) are the style, and the model writes the set-"
+            "aside classes in it (hand temperature "
+            f"{s.temperature}). generated: share of those letters the classifier attributes to "
+            "the right writer (mean ± sd over seeds); real: its share on the writers' own "
+            "letters of the same classes; ratio: generated over real; chance: one over the "
+            "writers.",
+            "",
+            _md_table(["family", "k", "generated", "real", "ratio", "chance"], body),
+            "",
+        ]
+    )
 
 
 def robustness_plot_csv(rows: list[dict], kind: str) -> str:

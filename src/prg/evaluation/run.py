@@ -54,8 +54,10 @@ from prg.evaluation.likelihood import (
     TABLE1_CELLS,
     estimate_cell_multi,
 )
+from prg.evaluation.modes import LIKENESS_MEASURES
 from prg.evaluation.settings import IMPUTED, CoherenceSettings, EvaluationSettings
 from prg.evaluation.smoothness import median_roughness
+from prg.evaluation.styles import style_summary
 from prg.models.base import MultimodalVAE
 from prg.models.checkpoint import load_model
 from prg.models.components import shift_images
@@ -91,6 +93,8 @@ class Evaluation:
     smoothness: list[dict] = field(default_factory=list)
     shifted_images: list[dict] = field(default_factory=list)
     classifiers: dict[str, dict] = field(default_factory=dict)
+    likeness: list[dict] = field(default_factory=list)
+    styles: list[dict] = field(default_factory=list)
     metrics: dict[str, Any] = field(default_factory=dict)
     report_dir: Path | None = None
     # (model, target, given subset, kind) -> coherence per class, for the figures
@@ -410,7 +414,60 @@ def metrics_of(result: Evaluation) -> dict[str, Any]:
         metrics[TEST_ROUGHNESS_KEY] = round(result.smoothness[0]["reference"], 4)
     for modality, meta in result.classifiers.items():
         metrics[f"classifier/{modality}/test_accuracy"] = round(meta["test_accuracy"], 4)
+    for row in result.likeness:
+        mode = likeness_key(row["mode"])
+        for measure in LIKENESS_MEASURES:
+            metrics[f"{row['family']}/likeness_{mode}_{measure}"] = round(row[measure], 4)
+    for row in style_summary(result.styles):
+        for key in ("generated", "ratio"):
+            metrics[f"{row['family']}/style_k{row['k']}_{key}"] = round(row[key], 4)
+        metrics[f"{row['family']}/style_real"] = round(row["real"], 4)
     return metrics
+
+
+def likeness_key(mode: str) -> str:
+    """A mode's name as a metric key part: ``hand (default)`` -> ``hand``, ``sampled T=0.5``
+    -> ``sampled_t0.5``, ``val writers`` -> ``val_writers``."""
+    return (
+        mode.replace(" (default)", "").replace(" (paper)", "").replace("T=", "t").replace(" ", "_")
+    )
+
+
+def likeness_part(models: Models, data_dir: Path, classifier, settings: EvaluationSettings):
+    """The likeness table (:func:`prg.evaluation.modes.mode_rows`) of every model."""
+    from prg.evaluation.modes import mode_rows
+
+    names = {"val": "val writers", "train": "train originals"}
+    references = {names[s]: load_split(data_dir / f"{s}.npz") for s in settings.likeness.references}
+    test = load_split(data_dir / "test.npz")
+    loaded = {name: (m.model, m.info.get("hands")) for name, m in models.items()}
+    return mode_rows(
+        loaded,
+        test,
+        references,
+        classifier,
+        settings.likeness.n_per_class,
+        settings.seed,
+        progress=(lambda what: log.info("likeness: %s", what)) if settings.progress else None,
+    )
+
+
+def styles_part(models: Models, data_dir: Path, settings: EvaluationSettings) -> list[dict]:
+    """Writer-identification rates of letters written in held-out writers' styles
+    (:func:`prg.evaluation.styles.style_rates`), for every model whose checkpoint has hands."""
+    from prg.evaluation.styles import style_rates
+
+    test = load_split(data_dir / "test.npz")
+    rows = []
+    for name, loaded in models.items():
+        bank = loaded.info.get("hands")
+        if bank is None:
+            log.warning("%s: its checkpoint has no hands; no style rates", name)
+            continue
+        s = settings.styles
+        for row in style_rates(loaded.model, bank, test, s.ks, s.seeds, s.n_eval, s.temperature):
+            rows.append({"family": name, **row})
+    return rows
 
 
 # ---- the whole evaluation --------------------------------------------------------------------
@@ -444,5 +501,12 @@ def run_evaluation(
         result.coherence, result.per_class = coherence_rows(models, classifiers, test, settings)
         result.smoothness = roughness_rows(models, test, settings)
         result.shifted_images = shifted_image_rows(models, classifiers, test, settings)
+    if "likeness" in settings.parts:
+        classifiers = ensure_classifiers(
+            data_dir, classifier_dir, settings.classifier, progress=settings.progress
+        )
+        result.likeness = likeness_part(models, data_dir, classifiers[TRAJ], settings)
+    if "styles" in settings.parts:
+        result.styles = styles_part(models, data_dir, settings)
     result.metrics = metrics_of(result)
     return result

@@ -17,6 +17,8 @@ from prg.checks import (
     EVALUATION_RANGES,
     IMAGE_SHIFT,
     LIKELIHOOD_RANGES,
+    LIKENESS_RANGES,
+    STYLE_RANGES,
     TEMPERATURE,
     require_number,
 )
@@ -25,7 +27,7 @@ from prg.evaluation.classifiers import DEFAULT_CFG
 from prg.evaluation.likelihood import PAPER_TRAJ_STD, TABLE1_CELLS
 from prg.fields import check_ranges
 
-PARTS = ("classifiers", "likelihood", "coherence")
+PARTS = ("classifiers", "likelihood", "coherence", "likeness", "styles")
 IMPUTED = "imputed"
 """The generation kind of samples decoded after imputing the missing modalities (MUSE)."""
 
@@ -106,6 +108,57 @@ class CoherenceSettings:
 
 
 @dataclass(frozen=True)
+class LikenessSettings:
+    """How generated letters are compared with held-out writers' (``likeness``;
+    :mod:`prg.evaluation.modes`).
+
+    n_per_class : letters of each class generated per family and mode, and drawn from each
+        reference split (at least 4: the k-NN measures use k = 3).
+    references : the splits whose real letters are the reference rows (``val``: other
+        held-out writers; ``train``: the training writers' originals).
+    """
+
+    n_per_class: int = 10
+    references: tuple[str, ...] = ("val", "train")
+
+    def __post_init__(self) -> None:
+        check_ranges(self, LIKENESS_RANGES)
+        refs = tuple(self.references)
+        if any(r not in ("train", "val") for r in refs):
+            raise SettingsError("references", f"{list(refs)}: choose from ['train', 'val']")
+        object.__setattr__(self, "references", refs)
+
+
+@dataclass(frozen=True)
+class StyleSettings:
+    """How writing in a held-out writer's style is scored (``styles``;
+    :mod:`prg.evaluation.styles`).
+
+    ks : letters of the writer given as the style.
+    seeds : repetitions (each sets other classes aside and draws other style letters).
+    n_eval : classes set aside per seed: generated in the style and scored.
+    temperature : the hand's std scale (``generate.hand_temperature``).
+    """
+
+    ks: tuple[int, ...] = (1, 5, 15)
+    seeds: tuple[int, ...] = (0, 1, 2)
+    n_eval: int = 12
+    temperature: float = 0.5
+
+    def __post_init__(self) -> None:
+        check_ranges(self, STYLE_RANGES)
+        for name in ("ks", "seeds"):
+            values = tuple(getattr(self, name))
+            if not values or any(
+                isinstance(v, bool) or not isinstance(v, int) or v < (1 if name == "ks" else 0)
+                for v in values
+            ):
+                low = "1" if name == "ks" else "0"
+                raise SettingsError(name, f"{list(values)}: give a list of integers >= {low}")
+            object.__setattr__(self, name, values)
+
+
+@dataclass(frozen=True)
 class ClassifierSettings:
     """How the coherence classifiers are trained (``classifier``, without its ``dir``;
     :func:`prg.evaluation.classifiers.ensure_classifiers`)."""
@@ -137,6 +190,8 @@ class EvaluationSettings:
     likelihood: LikelihoodSettings = field(default_factory=LikelihoodSettings)
     coherence: CoherenceSettings = field(default_factory=CoherenceSettings)
     classifier: ClassifierSettings = field(default_factory=ClassifierSettings)
+    likeness: LikenessSettings = field(default_factory=LikenessSettings)
+    styles: StyleSettings = field(default_factory=StyleSettings)
 
     def __post_init__(self) -> None:
         parts = list(self.parts)

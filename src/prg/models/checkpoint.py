@@ -17,6 +17,8 @@ from typing import Any
 
 import torch
 
+from prg.data.hands import CHECKPOINT_KEY as HANDS_KEY
+from prg.data.hands import HandBank
 from prg.errors import UsageError
 from prg.models.base import MultimodalVAE
 
@@ -96,7 +98,8 @@ def _allowed(target: Any) -> bool:
 
 def load_model(path: str | os.PathLike) -> tuple[MultimodalVAE, dict[str, Any]]:
     """The trained model of a checkpoint (eval mode, CPU) and the checkpoint's extra entries
-    (``mlflow_run_id``, ``epoch``, ``global_step`` ... ; no weights).
+    (``mlflow_run_id``, ``epoch``, ``global_step`` ... ; no weights), and ``hands``: the
+    training writers' letters (:class:`~prg.data.hands.HandBank`) when the checkpoint has them.
 
     Built from the checkpoint's ``model`` hyper-parameters and the ``model.``-prefixed weights of
     :class:`~prg.models.module.PRGModule`'s state dict, without the LightningModule: importing
@@ -115,4 +118,9 @@ def load_model(path: str | os.PathLike) -> tuple[MultimodalVAE, dict[str, Any]]:
     if hasattr(model, "top_scale") and "top_scale" in ckpt:
         model.top_scale = ckpt["top_scale"]
     info = {k: v for k, v in ckpt.items() if k in ("mlflow_run_id", "epoch", "global_step")}
+    if HANDS_KEY in ckpt:
+        try:
+            info[HANDS_KEY] = HandBank.from_checkpoint(ckpt[HANDS_KEY])
+        except (KeyError, TypeError, AttributeError, ValueError):
+            raise UsageError(f"checkpoint {path}: its writers' letters are unreadable") from None
     return model.eval(), info

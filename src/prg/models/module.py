@@ -156,6 +156,14 @@ class PRGModule(L.LightningModule):
     def on_save_checkpoint(self, checkpoint: dict[str, Any]) -> None:
         if hasattr(self.model, "top_scale"):  # a plain attribute, not in the state dict
             checkpoint["top_scale"] = float(self.model.top_scale)
+        # the training writers' original letters: the hands a generated word is written in
+        # (prg.pipeline.hands), so a checkpoint writes without its dataset
+        datamodule = getattr(self._trainer, "datamodule", None) if self._trainer else None
+        letters = getattr(datamodule, "train_letters", None)
+        if letters is not None:
+            from prg.data.hands import CHECKPOINT_KEY, HandBank
+
+            checkpoint[CHECKPOINT_KEY] = HandBank.from_split(letters).to_checkpoint()
 
     def on_load_checkpoint(self, checkpoint: dict[str, Any]) -> None:
         if hasattr(self.model, "top_scale") and "top_scale" in checkpoint:

@@ -29,14 +29,23 @@ from prg.pipeline.word import DEFAULT_SPEED_CM_S, WordTrajectory, assemble_word
 log = logging.getLogger(__name__)
 
 CONNECTION_METHODS = ("alg1", "straight")
+DECODING_MODES = ("hand", "posterior")
 
 
 @dataclass(frozen=True)
 class GenerateSettings:
     """How a word is generated and timed (all config values, ``conf/write.yaml``).
 
-    temperature : 0 decodes each letter's posterior mean; > 0 draws latents with their std
-        scaled by it (variety), reproducibly for ``seed``.
+    mode : ``"hand"`` (default): each letter is drawn from the posterior of a real writer's
+        letter of its class, one writer's letters for the whole word (the writer chosen by
+        ``seed``, or matched to a person's letters: ``Writer(style=...)``), its std scaled by
+        ``hand_temperature`` (:mod:`prg.pipeline.hands`); the letters vary as writers' do and
+        stay legible. ``"posterior"``: the paper's decoding of the command's posterior
+        (``temperature``, ``impute_steps``).
+    hand_temperature : the std scale of a hand's letter posteriors (0: the letters' means).
+    seed : chooses the writer and the samples: one seed one word, another seed another hand.
+    temperature : posterior mode: 0 decodes each letter's posterior mean (the paper); > 0 draws
+        latents with their std scaled by it, reproducibly for ``seed``.
     impute_steps : rounds of imputing the modalities a letter was not given before decoding
         (:meth:`prg.models.muse.MUSE.encode_imputed`; families without a joint posterior ignore
         it). 0 is the paper's decoding. The demo MUSE's letters from labels read right (folded
@@ -54,6 +63,8 @@ class GenerateSettings:
         stroke.
     """
 
+    mode: str = "hand"
+    hand_temperature: float = 0.5
     temperature: float = 0.0
     seed: int = 0
     impute_steps: int = 20
@@ -69,6 +80,8 @@ class GenerateSettings:
 
     def __post_init__(self) -> None:
         check_ranges(self, GENERATE_RANGES)
+        if self.mode not in DECODING_MODES:
+            raise SettingsError("mode", f"{self.mode!r}: choose hand or posterior")
         if self.method not in CONNECTION_METHODS:
             raise SettingsError("method", f"{self.method!r}: choose alg1 or straight")
         if not isinstance(self.delayed_strokes, bool):
