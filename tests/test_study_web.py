@@ -358,6 +358,36 @@ def capture(page, folder: Path, writer: str, restart_on: int | None = None) -> d
     return json.loads(Path(download.value.path()).read_text())
 
 
+def test_my_style_records_letters_into_a_style_file_prg_write_reads(
+    page, tmp_path, samples, untrained_muse_checkpoint
+):
+    """The capture page's "my style" flow: single letters, one stroke each, downloaded as a
+    style file that :func:`prg.pipeline.hands.read_style` and ``Writer(style=...)`` take."""
+    from prg import Writer
+    from prg.alphabet import char_to_label
+    from prg.pipeline.hands import read_style
+
+    folder = build(tmp_path / "b", "turing", "attention_checks=[]", robot=samples["robot"])
+    page.goto((folder / "capture" / "index.html").as_uri() + "?writer=me&style=aeb")
+    assert "My style" in page.text_content("h1")
+    page.click("#begin")
+    with page.expect_download() as download:
+        for k, letter in enumerate("aeb"):
+            assert page.text_content("#word") == letter
+            assert page.text_content("#next") == ("Next letter" if k < 2 else "Finish")
+            write_word(page, k)
+            page.click("#next")
+    assert download.value.suggested_filename.startswith("style_me_")
+    path = tmp_path / "style.json"
+    path.write_text(Path(download.value.path()).read_text())
+    doc = json.loads(path.read_text())
+    assert doc["purpose"] == "style" and doc["delayed_strokes"] is False
+    traj, labels = read_style(path)
+    assert traj.shape == (3, 200) and [int(y) for y in labels] == [char_to_label(c) for c in "aeb"]
+    word = Writer.from_checkpoint(untrained_muse_checkpoint, style=path).write(text="bead")
+    assert word.text == "bead" and word.letters.shape == (4, 100, 2)
+
+
 def test_captured_human_strokes_fit_a_dmp_that_starts_and_ends_moving(page, tmp_path, samples):
     """A writer's words from the capture page, at their recorded times, go through the DMP fit
     of human demonstrations (prg.pipeline.dmp: ``uniform_in_time``, then ``fit_dmp(...,

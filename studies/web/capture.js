@@ -20,6 +20,10 @@
  *     "samples": [ { "word": "cat", "strokes": [[[x, y, t_ms, pressure], ...], ...],
  *                    "delayed": [1], "lifted": false, "restarts": 0, "skipped": false,
  *                    "pointer_type": "pen", "started_at": ISO, "duration_ms": 1830.4 }, ... ] }
+ * "My style" (URL parameter style=1, or style=LETTERS such as style=abdegh): the writer writes
+ * single letters instead of the study's words (STYLE_LETTERS by default), each in one stroke, and
+ * downloads style_<id>_<time>.json (the same schema, "purpose": "style"; never posted): the
+ * style file of `prg-write style=FILE`, which writes any word in that hand.
  * x, y in canvas CSS pixels (y down), t_ms from the sample's first pen-down. "delayed" lists the
  * strokes (by index, never 0: the first stroke is the word) kept as delayed strokes; files
  * written before it have no "delayed" and read as having none.
@@ -36,6 +40,12 @@
   function show(nodes) { page.show(app, nodes); }
 
   var params = new URLSearchParams(window.location.search);
+  // "my style": a few single letters, each in one stroke (see the header)
+  var STYLE_LETTERS = "abdeghklmnorstw";
+  var styleParam = params.get("style");
+  var styleMode = styleParam !== null && styleParam !== "0";
+  var styleLetters = styleMode && /^[0-9A-Za-z]{1,62}$/.test(styleParam) ? styleParam : STYLE_LETTERS;
+  var words = cfg ? (styleMode ? styleLetters.split("") : cfg.words) : [];
   var state = {
     writer_id: null,
     started_at: null,
@@ -53,7 +63,7 @@
   // and no wider than twice that (a bar is flat but can be long); a larger one is a pen lift
   // (on_lift decides what happens). A letter written after a lift is at least as tall as the
   // x-height, half or more of a word's height, so it does not pass as a mark.
-  function delayedOn() { return cfg.delayed_strokes === true; }
+  function delayedOn() { return !styleMode && cfg.delayed_strokes === true; }
   function maxDelayedSize() {
     var f = Number(cfg.delayed_max_size);
     return f > 0 ? f : 0.35;
@@ -93,8 +103,12 @@
     });
     check();
     show([
-      el("h1", { text: "Handwriting recording" }),
-      el("p", { id: "intro-text", text: "You will see " + cfg.words.length + " words, one at a time. Write each word in cursive handwriting " +
+      el("h1", { text: styleMode ? "My style: a few letters in your hand" : "Handwriting recording" }),
+      el("p", { id: "intro-text", text: styleMode
+        ? "You will see " + words.length + " letters, one at a time. Write each letter as you usually do, in one " +
+          "continuous movement (leave out the dots of i and j). At the end you download your style file: " +
+          "prg-write style=FILE writes any word in your hand."
+        : "You will see " + words.length + " words, one at a time. Write each word in cursive handwriting " +
         "in the box, in one continuous movement: do not lift the pen (or finger, or mouse button) until the word is finished. " +
         (delayedOn()
           ? "Then dot the i's and j's and cross the t's and f's, as you usually do; keep the dots and bars small."
@@ -109,8 +123,8 @@
 
   function word(index) {
     state.index = index;
-    if (index >= cfg.words.length) { finish(); return; }
-    var text = cfg.words[index];
+    if (index >= words.length) { finish(); return; }
+    var text = words[index];
     var dpr = window.devicePixelRatio || 1;
     var pad = el("canvas", { id: "pad", width: Math.round(cfg.canvas_width * dpr), height: Math.round(cfg.canvas_height * dpr) });
     // shrinks on narrow screens, always keeping its shape: x and y stay on one scale
@@ -119,9 +133,9 @@
     pad.style.aspectRatio = cfg.canvas_width + " / " + cfg.canvas_height;
     var ctx = pad.getContext("2d");
     var message = el("p", { class: "note", id: "message" });
-    var next = el("button", { class: "primary", id: "next", disabled: true, text: index + 1 < cfg.words.length ? "Next word" : "Finish" });
+    var next = el("button", { class: "primary", id: "next", disabled: true, text: index + 1 < words.length ? (styleMode ? "Next letter" : "Next word") : "Finish" });
     var clear = el("button", { id: "clear", text: "Clear" });
-    var skip = el("button", { id: "skip", text: "Skip this word" });
+    var skip = el("button", { id: "skip", text: styleMode ? "Skip this letter" : "Skip this word" });
     var sample = null;
     var drawing = null;  // the stroke being drawn
 
@@ -199,7 +213,7 @@
       (events.length ? events : [event]).forEach(add);
     });
     function lifted() {
-      if (cfg.on_lift === "restart") {
+      if (styleMode || cfg.on_lift === "restart") {  // a style letter is one stroke
         var restarts = sample.restarts + 1;
         reset();
         sample.restarts = restarts;
@@ -252,7 +266,7 @@
     });
 
     show([
-      el("p", { class: "progress", id: "progress", text: "Word " + (index + 1) + " of " + cfg.words.length }),
+      el("p", { class: "progress", id: "progress", text: (styleMode ? "Letter " : "Word ") + (index + 1) + " of " + words.length }),
       el("p", { id: "task", text: delayedOn()
         ? "Write this word in one movement, without lifting the pen; then dot the i's and j's and cross the t's and f's:"
         : "Write this word in one movement, without lifting the pen:" }),
@@ -274,7 +288,7 @@
       started_at: state.started_at,
       finished_at: new Date().toISOString(),
       user_agent: navigator.userAgent,
-      on_lift: cfg.on_lift,
+      on_lift: styleMode ? "restart" : cfg.on_lift,
       delayed_strokes: delayedOn(),
       delayed_max_size: delayedOn() ? maxDelayedSize() : null,
       canvas: {
@@ -286,28 +300,31 @@
         baseline_y: baselineY(),
       },
       samples: state.samples,
+      purpose: styleMode ? "style" : "study",
     };
   }
 
   function download(text) {
-    page.download(text, "application/json", "capture_" + state.writer_id + "_" + page.fileStamp() + ".json");
+    var prefix = styleMode ? "style_" : "capture_";
+    page.download(text, "application/json", prefix + state.writer_id + "_" + page.fileStamp() + ".json");
   }
 
   function finish() {
     state.document = captureDocument();
     var text = JSON.stringify(state.document);
     var status = el("p", { class: "note", id: "done-status" });
-    var again = el("button", { class: "primary", id: "download", text: "Download the recording (JSON)" });
+    var again = el("button", { class: "primary", id: "download", text: styleMode ? "Download my style file (JSON)" : "Download the recording (JSON)" });
     again.addEventListener("click", function () { download(text); });
     var recorded = state.samples.filter(function (s) { return !s.skipped; }).length;
     show([
       el("h1", { text: "Thank you!" }),
-      el("p", { id: "done-text", text: recorded + " of " + cfg.words.length + " words were recorded for writer " + state.writer_id + "." }),
+      el("p", { id: "done-text", text: recorded + " of " + words.length + (styleMode ? " letters" : " words") + " were recorded for writer " + state.writer_id + "." +
+        (styleMode ? " Write any word in this hand: prg-write text=WORD style=style_" + state.writer_id + "_....json" : "") }),
       status,
       el("div", { class: "actions" }, [again]),
     ]);
     download(text);
-    if (cfg.post_url) {
+    if (cfg.post_url && !styleMode) {  // a style file stays with its writer
       status.textContent = "Sending\u2026";
       page.postText(cfg.post_url, text, 1)
         .then(function () {

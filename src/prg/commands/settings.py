@@ -133,7 +133,12 @@ def writer_from_config(cfg: DictConfig) -> Writer:
         import torch
 
         torch.set_num_threads(int(cfg.threads))
-    return Writer.from_checkpoint(path, settings=generate, speech=speech, on_unknown=cfg.on_unknown)
+    style = cfg.get("style")
+    if style is not None and not isinstance(style, str):
+        raise UsageError(f"style must be a file path, got {style!r}")
+    return Writer.from_checkpoint(
+        path, settings=generate, speech=speech, on_unknown=cfg.on_unknown, style=style
+    )
 
 
 def simulation_settings(cfg: DictConfig) -> tuple[RobotSettings, SimSettings]:

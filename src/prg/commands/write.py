@@ -103,6 +103,8 @@ def _log_run(run, cfg: DictConfig, writer: Writer, result: WriteResult, out_dir:
         "ckpt": str(checkpoint_path(cfg)),
         "generate": dataclasses.asdict(writer.settings),
     }
+    if cfg.get("style") is not None:
+        params["style"] = str(cfg.style)
     transcript = result.perception.transcript
     if transcript is not None:
         params.update(speech=dataclasses.asdict(transcript), audio=str(cfg.audio))
