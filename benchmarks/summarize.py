@@ -19,6 +19,7 @@ import argparse
 import json
 import math
 import os
+import re
 import shutil
 import sys
 from collections.abc import Callable
@@ -702,6 +703,61 @@ def _shifted_images_markdown(evaluate: dict) -> list[str]:
     ]
 
 
+LIKENESS_MEASURES = ("legible", "precision", "recall", "c2st", "spread")
+
+
+def likeness_markdown(evaluate: dict) -> str:
+    """The likeness table (``<family>/likeness_<mode>_<measure>``) and the style rates
+    (``<family>/style_k<k>_generated`` ...), where the snapshot has them (older ones do not)."""
+    pattern = re.compile(r"^([^/]+)/likeness_(.+)_legible$")
+    rows = [m.groups() for k in evaluate if (m := pattern.match(k))]
+    if not rows:
+        return ""
+    body = []
+    for family, mode in rows:
+        name = "real letters" if family == "real" else family
+        shown = mode.replace("_", " ").replace(" t", " T=")
+        if mode == "hand":
+            shown = "**hand (default)**"
+        elif mode == "mean":
+            shown = "mean (the paper)"
+        cells = [f"{evaluate[f'{family}/likeness_{mode}_{m}']:.2f}" for m in LIKENESS_MEASURES]
+        body.append([name, shown, *cells])
+    lines = [
+        "**Likeness to held-out writers** (`reports/likeness.md`): 10 letters per class from "
+        "their labels against the test split's letters; legible = read right by the trajectory "
+        "classifier (folded); k-NN precision / recall (k = 3); C2ST = linear classifier's "
+        "accuracy telling them from real (0.5 ideal); spread = within-class distance over the "
+        "real letters' (1 ideal). The first rows are real letters scored the same way.",
+        "",
+        _table(["family", "mode", *LIKENESS_MEASURES], body),
+    ]
+    style = re.compile(r"^([^/]+)/style_k(\d+)_generated$")
+    found = [m.groups() for k in evaluate if (m := style.match(k))]
+    if found:
+        lines += [
+            "",
+            "**A writer's style from k letters** (`reports/styles.md`): share of letters written "
+            "in a held-out writer's style that a writer-identification classifier attributes to "
+            "that writer, over the same for the writer's own letters (ratio).",
+            "",
+            _table(
+                ["family", "k", "generated", "own letters", "ratio"],
+                [
+                    [
+                        f,
+                        k,
+                        f"{evaluate[f'{f}/style_k{k}_generated']:.2f}",
+                        f"{evaluate[f'{f}/style_real']:.2f}",
+                        f"{evaluate[f'{f}/style_k{k}_ratio']:.2f}",
+                    ]
+                    for f, k in found
+                ],
+            ),
+        ]
+    return "\n".join(lines)
+
+
 def demo_markdown(demo: Path = DEMO) -> str:
     """Tables of the demo pipeline's results (quick profile, synthetic data)."""
     d = {name: read_json(demo / name) for name in DEMO_SOURCES}
@@ -735,6 +791,7 @@ def demo_markdown(demo: Path = DEMO) -> str:
         "",
         coherence_markdown(evaluate),
         "",
+        *([likeness_markdown(evaluate), ""] if likeness_markdown(evaluate) else []),
         f"**Table II** (`prg-dictaphone`, MUSE): the words from speech (whisper, lexicon, "
         f"rescoring) and from the letter images alone (images read right: "
         f"{dictaphone['image_read_accuracy']:.0%}{_folded_reading(dictaphone)}):",

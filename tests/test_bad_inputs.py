@@ -426,7 +426,8 @@ CASES = [
         "prg-write",
         "text=hi generate.temprature=0.5",
         2,
-        "(closest: generate.temperature); accepted under generate: temperature, seed",
+        "(closest: generate.temperature, generate.hand_temperature); accepted under generate: "
+        "mode, hand_temperature, temperature, seed",
     ),
     case(
         "write-key-below-a-value",

@@ -297,8 +297,15 @@ def test_bad_input_gets_one_line_and_exit_2_and_writes_nothing(
 
 
 SETTINGS_REFUSED = [
-    (["parts=[plots]"], "parts ['plots']: choose from ['classifiers', 'likelihood', 'coherence']"),
-    (["parts=[]"], "parts []: choose from ['classifiers', 'likelihood', 'coherence']"),
+    (
+        ["parts=[plots]"],
+        "parts ['plots']: choose from ['classifiers', 'likelihood', 'coherence', 'likeness', "
+        "'styles']",
+    ),
+    (
+        ["parts=[]"],
+        "parts []: choose from ['classifiers', 'likelihood', 'coherence', 'likeness', 'styles']",
+    ),
     (
         ["likelihood.cells=[logp_X,logp_T]"],
         "likelihood.cells ['logp_X']: use 'all' or a list of ['logp_T', 'logp_S', 'logp_I', "
@@ -329,7 +336,8 @@ def test_settings_of_the_shipped_config_and_of_the_library_alone():
     from prg.evaluation.settings import CoherenceSettings, EvaluationSettings, LikelihoodSettings
 
     settings = evaluation_settings(compose_config("evaluate", ["likelihood.cells=logp_T"]))
-    assert settings.parts == ("likelihood", "coherence") and not settings.classifiers_only
+    assert settings.parts == ("likelihood", "coherence", "likeness", "styles")
+    assert not settings.classifiers_only
     assert settings.likelihood.requested == (["logp_T"], True)
     assert settings.coherence.temperatures == {"mean": 0.0, "sampled": 1.0}
     assert settings.coherence.impute_steps == 20

@@ -108,6 +108,7 @@ TEMPERATURE = non_negative(TEMPERATURE_MAX)
 # ---- the fields of library settings classes (each validates itself with its own table) ----
 GENERATE_RANGES: dict[str, Range] = {  # prg.pipeline.compose.GenerateSettings
     "hand_temperature": TEMPERATURE,
+    "hand_seed": count(0, SEED_MAX, optional=True),
     "temperature": TEMPERATURE,
     "seed": SEED,
     "impute_steps": count(0, 1000),
@@ -271,6 +272,8 @@ RANGES: dict[str, Range] = {
     **_under("classifier", CLASSIFIER_RANGES),
     **_under("likeness", LIKENESS_RANGES),
     **_under("styles", STYLE_RANGES),
+    "styles.ks": count(1, 61),  # letters given as the style (the other classes are scored)
+    "styles.seeds": SEED,
     # prg-write (and prg-dictaphone, prg-simulate, which run it)
     "layout.*": positive(100),  # cm, or fractions of the letter height
     "connection.delta": positive(10),

@@ -46,12 +46,13 @@ from prg.pipeline.decode import (
 )
 from prg.pipeline.hands import (
     Hand,
-    components,
     decode_in_hand,
+    decoder_bias,
     match_hand,
     nearest_components,
     random_hand,
     read_style,
+    write_in_hand,
 )
 from prg.pipeline.perceive import (
     perceive_letter_images,
@@ -255,6 +256,7 @@ class Writer:
         self.speech = speech or SpeechSettings()
         self.on_unknown = on_unknown
         self.hands = hands
+        self._bias: np.ndarray | None = None
         self.hand: Hand | None = None
         if style is not None:
             self.hand = match_hand(self._bank("style="), *_style_letters(style))
@@ -408,12 +410,28 @@ class Writer:
             usable = usable_inputs(self.model, inputs)
             if set(usable) != {LABEL}:
                 chosen = nearest_components(self.model, bank, usable, labels)
+                s = settings
                 return decode_in_hand(
-                    self.model, chosen, labels, settings.hand_temperature, settings.seed
+                    self.model, chosen, labels, s.hand_temperature, s.seed, self._decoder_bias()
                 )
-        hand = self.hand or random_hand(bank, settings.seed)
-        chosen = components(bank, hand, labels, settings.seed)
-        return decode_in_hand(self.model, chosen, labels, settings.hand_temperature, settings.seed)
+        hand_seed = settings.seed if settings.hand_seed is None else settings.hand_seed
+        hand = self.hand or random_hand(bank, hand_seed)
+        return write_in_hand(
+            self.model,
+            bank,
+            hand,
+            labels,
+            settings.hand_temperature,
+            settings.seed,
+            self._decoder_bias(),
+        )
+
+    def _decoder_bias(self) -> np.ndarray:
+        """:func:`decoder_bias`, estimated once per writer (about 70 ms for the demo's 5,208
+        letters)."""
+        if self._bias is None:
+            self._bias = decoder_bias(self.model, self._bank("generate.mode=hand"))
+        return self._bias
 
     def _decode_posterior(self, inputs: dict[str, torch.Tensor]) -> np.ndarray:
         """One trajectory per letter (:func:`decode_letters`).

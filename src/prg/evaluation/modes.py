@@ -37,7 +37,7 @@ from prg.evaluation.classifiers import folded_accuracy, predict
 from prg.evaluation.likeness import likeness
 from prg.models.base import MultimodalVAE
 from prg.models.modalities import LABEL, TRAJ
-from prg.pipeline.hands import components, decode_in_hand, random_hand
+from prg.pipeline.hands import components, decode_in_hand, decoder_bias, random_hand
 
 
 @dataclass(frozen=True)
@@ -100,6 +100,7 @@ def generate_by_class(
     classes do not share one draw of writers (ten hands for all 62 classes would make every
     class's measures hang on the same ten people)."""
     labels = np.arange(NUM_CLASSES)
+    bias = decoder_bias(model, bank) if mode.kind == "hand" and bank is not None else None
     rounds = []
     for i in range(n_per_class):
         if mode.kind == "hand":
@@ -111,8 +112,8 @@ def generate_by_class(
                     components(bank, random_hand(bank, int(s)), labels[c : c + 1], int(s))
                     for c, s in enumerate(seeds)
                 ]
-            )
-            letters = decode_in_hand(model, chosen, labels, mode.temperature, seed + i)
+            )  # a random hand has no map: its letters are the writer's (write_in_hand's)
+            letters = decode_in_hand(model, chosen, labels, mode.temperature, seed + i, bias)
             rounds.append(letters.reshape(NUM_CLASSES, -1))
         else:
             torch.manual_seed(seed + i)

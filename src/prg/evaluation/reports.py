@@ -419,6 +419,11 @@ STYLE_COLUMNS = ("family", "seed", "k", "generated", "real", "chance", "writers"
 
 def likeness_markdown(rows: list[dict], settings: EvaluationSettings) -> str:
     """The likeness table: reference rows first, then each family's modes."""
+    if not rows:
+        return (
+            "# Likeness: generated letters against held-out writers' letters\n\nNot computed: "
+            "the test split has at most 3 letters of a class (at least 4 are needed).\n"
+        )
     n = settings.likeness.n_per_class
     body = [
         [
@@ -453,6 +458,12 @@ def likeness_markdown(rows: list[dict], settings: EvaluationSettings) -> str:
 def styles_markdown(rows: list[dict], settings: EvaluationSettings) -> str:
     """The style table: per family and k, the writer-identification rates over seeds."""
     s = settings.styles
+    if not rows:
+        return (
+            "# Style: writing in a held-out writer's hand from k of their letters\n\nNot "
+            "computed: the test split has fewer than 2 writers, or no model's checkpoint keeps "
+            "its training writers' letters.\n"
+        )
     body = [
         [
             title(r["family"]),

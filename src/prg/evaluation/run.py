@@ -438,8 +438,16 @@ def likeness_part(models: Models, data_dir: Path, classifier, settings: Evaluati
     from prg.evaluation.modes import mode_rows
 
     names = {"val": "val writers", "train": "train originals"}
-    references = {names[s]: load_split(data_dir / f"{s}.npz") for s in settings.likeness.references}
     test = load_split(data_dir / "test.npz")
+    most = int(np.bincount(test["label"][~test["augmented"]]).max(initial=0))
+    if most <= 3:  # the k-NN measures compare a class's letters with their 3 nearest
+        log.warning(
+            "likeness not computed: the test split has at most %d letters of a class (at least 4 "
+            "are needed); prepare more writers",
+            most,
+        )
+        return []
+    references = {names[s]: load_split(data_dir / f"{s}.npz") for s in settings.likeness.references}
     loaded = {name: (m.model, m.info.get("hands")) for name, m in models.items()}
     return mode_rows(
         loaded,
@@ -458,6 +466,10 @@ def styles_part(models: Models, data_dir: Path, settings: EvaluationSettings) ->
     from prg.evaluation.styles import style_rates
 
     test = load_split(data_dir / "test.npz")
+    writers = len(set(test["writer"][~test["augmented"]]))
+    if writers < 2:
+        log.warning("styles not computed: the test split has %d writer (2 or more needed)", writers)
+        return []
     rows = []
     for name, loaded in models.items():
         bank = loaded.info.get("hands")

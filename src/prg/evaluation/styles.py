@@ -31,7 +31,7 @@ from sklearn.preprocessing import StandardScaler
 from prg.data.hands import HandBank
 from prg.evaluation.modes import originals
 from prg.models.base import MultimodalVAE
-from prg.pipeline.hands import components, decode_in_hand, match_hand
+from prg.pipeline.hands import decoder_bias, match_hand, write_in_hand
 
 
 def writer_features(traj: np.ndarray) -> np.ndarray:
@@ -106,6 +106,7 @@ def style_rates(
     features = writer_features(traj)
     means = {int(c): features[labels == c].mean(0) for c in np.unique(labels)}
     centred = class_centred(features, labels, means)
+    bias = decoder_bias(model, bank)
     rows = []
     for seed in seeds:
         rng = np.random.default_rng(seed)
@@ -123,8 +124,7 @@ def style_rates(
                 style = np.array([rng.choice(mine[labels[mine] == c]) for c in given])
                 hand = match_hand(bank, traj[style], labels[style])
                 targets = np.unique(labels[(writers == w) & held])
-                chosen = components(bank, hand, targets, seed)
-                letters = decode_in_hand(model, chosen, targets, temperature, seed)
+                letters = write_in_hand(model, bank, hand, targets, temperature, seed, bias)
                 x = class_centred(
                     writer_features(letters.reshape(len(targets), -1)), targets, means
                 )

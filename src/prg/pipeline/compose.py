@@ -43,7 +43,10 @@ class GenerateSettings:
         stay legible. ``"posterior"``: the paper's decoding of the command's posterior
         (``temperature``, ``impute_steps``).
     hand_temperature : the std scale of a hand's letter posteriors (0: the letters' means).
-    seed : chooses the writer and the samples: one seed one word, another seed another hand.
+    seed : chooses the samples and, unless ``hand_seed`` is given, the writer: one seed one
+        word, another seed another hand.
+    hand_seed : chooses the writer alone (None: ``seed``): the same ``hand_seed`` with other
+        ``seed`` values writes a word again in the same hand, as a person writes it twice.
     temperature : posterior mode: 0 decodes each letter's posterior mean (the paper); > 0 draws
         latents with their std scaled by it, reproducibly for ``seed``.
     impute_steps : rounds of imputing the modalities a letter was not given before decoding
@@ -67,6 +70,7 @@ class GenerateSettings:
     hand_temperature: float = 0.5
     temperature: float = 0.0
     seed: int = 0
+    hand_seed: int | None = None
     impute_steps: int = 20
     method: str = "alg1"
     speed_cm_s: float = DEFAULT_SPEED_CM_S
