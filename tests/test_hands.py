@@ -77,8 +77,9 @@ def test_a_writer_without_the_given_classes_is_never_matched():
     bank = stand_in_hands(n_writers=2)
     keep = ~((bank.writer == 0) & (bank.label == 3))
     bank = HandBank(bank.traj[keep], bank.label[keep], bank.writer[keep], bank.writers)
-    distances = hand_distances(bank, bank.traj[bank.label == 3][:1], np.array([3]))
+    distances, transforms = hand_distances(bank, bank.traj[bank.label == 3][:1], np.array([3]))
     assert np.isinf(distances[0]) and np.isfinite(distances[1])
+    np.testing.assert_array_equal(transforms[0], np.eye(2))
 
 
 def test_components_use_own_letters_then_the_writers_then_the_nearest_writers():
@@ -178,3 +179,20 @@ def test_a_style_npz_with_the_wrong_shape_is_refused(tmp_path):
     np.savez(tmp_path / "s.npz", traj=np.zeros((2, 100)), text="ab")
     with pytest.raises(UsageError, match=r"accepted is \(k, 200\)"):
         read_style(tmp_path / "s.npz")
+
+
+def test_a_persons_slant_is_found_and_put_on_the_letters_written_from_the_writers():
+    """A person who writes writer 1's letters sheared: the match is writer 1, its map is the
+    shear, and the letters written from writer 1's carry it."""
+    from prg.pipeline.hands import apply_transform, fit_transform
+
+    bank = stand_in_hands(n_writers=3, seed=2)
+    shear = np.array([[1.0, 0.25], [0.0, 1.0]])
+    mine = np.flatnonzero(bank.writer == 1)[:6]
+    own = apply_transform(bank.traj[mine].reshape(6, 100, 2), shear).reshape(6, -1)
+    hand = match_hand(bank, own, bank.label[mine])
+    assert hand.writer == 1
+    # the map is the shear up to the normalisation's scale, and pulled a little to identity
+    direction = hand.transform / np.abs(hand.transform).max()
+    np.testing.assert_allclose(direction, shear / np.abs(shear).max(), atol=0.05)
+    np.testing.assert_allclose(fit_transform(own, own), np.eye(2), atol=1e-12)
