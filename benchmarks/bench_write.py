@@ -1,7 +1,8 @@
 """Benchmark writing a word: label input -> letters -> layout -> connections -> one DMP rollout.
 
 For words of 1-12 letters (``--reps`` random lowercase words per length, seeded), the whole
-``prg.writer.Writer.generate`` path is timed (decode every letter, final processing map,
+``prg.writer.Writer.generate`` path of a warm writer is timed in the default decoding (letters
+in a writer's hand, ``generate.mode=hand``; decode every letter, final processing map,
 Algorithm 1 connection strokes, rest-to-rest timing, DMP fit and rollout), side by side in the
 same run with two references:
 
@@ -40,6 +41,7 @@ import string
 import subprocess
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -71,34 +73,39 @@ SPEECH_SETTINGS = {
 
 
 def family_model(family: str):
-    """The demo model of ``family``, or seeded random weights; and where it came from."""
+    """The demo model of ``family`` and its checkpoint's hands, or seeded random weights and
+    no hands; and where it came from."""
     ckpt = ROOT / "models" / family / "model.ckpt"
     if ckpt.exists():
-        return load_model(ckpt)[0], str(ckpt.relative_to(ROOT))
+        model, info = load_model(ckpt)
+        return model, info.get("hands"), str(ckpt.relative_to(ROOT))
     from hydra.utils import instantiate
 
     torch.manual_seed(0)
     cfg = compose_config("train", [f"model={family}"]).model.module
-    return instantiate(OmegaConf.to_container(cfg, resolve=True)), "random weights (no demo model)"
+    model = instantiate(OmegaConf.to_container(cfg, resolve=True))
+    return model, None, "random weights (no demo model: the posterior decoding, no hands)"
 
 
 def words_of(length: int, reps: int, rng: random.Random) -> list[str]:
     return ["".join(rng.choice(string.ascii_lowercase) for _ in range(length)) for _ in range(reps)]
 
 
-def time_word(model, text: str, params: GenerateSettings) -> dict:
+def time_word(writer: Writer, straight: Writer, text: str) -> dict:
+    """One word by two warm writers (Algorithm 1 and the straight joiner), and the model's
+    generation map alone."""
+    model, params = writer.model, writer.settings
     inputs = label_inputs(text)
     start = time.perf_counter()
     with torch.no_grad():
         model.generate(usable_inputs(model, inputs), "traj", n=1)
     decode = time.perf_counter() - start
     start = time.perf_counter()
-    result = Writer(model, params).generate(Perception(text, inputs))
+    result = writer.generate(Perception(text, inputs))
     word, path = result.word, result.rollout
     total = time.perf_counter() - start
-    straight = GenerateSettings(**{**params.__dict__, "method": "straight"})
     start = time.perf_counter()
-    Writer(model, straight).generate(Perception(text, inputs))
+    straight.generate(Perception(text, inputs))
     total_straight = time.perf_counter() - start
     samples, _ = rest_to_rest_samples(
         word.body, params.speed_cm_s, params.ramp_s, params.samples_per_s
@@ -116,7 +123,7 @@ def time_word(model, text: str, params: GenerateSettings) -> dict:
     }
 
 
-def speech_rows(model, family: str, params: GenerateSettings, reps: int) -> list[dict]:
+def speech_rows(model, hands, family: str, params: GenerateSettings, reps: int) -> list[dict]:
     """Speech end to end in a warm process, per recogniser setting: a ``Writer`` built once
     writes each spoken word (``Writer.write(audio=...)``: read, recognise, letters, layout,
     connections, DMP rollout), timed against ``recognise`` alone on the same file, alternated
@@ -133,7 +140,7 @@ def speech_rows(model, family: str, params: GenerateSettings, reps: int) -> list
             audio[word] = wav
         for backend, settings in SPEECH_SETTINGS.items():
             settings = speech.SpeechSettings(**settings)
-            writer = Writer(model, params, speech=settings, on_unknown="skip")
+            writer = Writer(model, params, speech=settings, on_unknown="skip", hands=hands)
             for word, wav in audio.items():
                 with contextlib.suppress(UsageError):
                     writer.write(audio=wav)  # warm-up, untimed
@@ -176,15 +183,18 @@ def main() -> None:
     parser.add_argument("--speech", action="store_true", help="also time speech input")
     args = parser.parse_args()
     torch.set_num_threads(args.threads)
-    params = GenerateSettings()
-
     rows, speech, sources = [], [], {}
     for family in args.families:
-        model, sources[family] = family_model(family)
-        time_word(model, "warm", params)
+        model, hands, sources[family] = family_model(family)
+        # warm writers, as a served model's: the default hand decoding where the checkpoint
+        # has hands (its decoder bias estimated once, by the warm-up word)
+        params = GenerateSettings() if hands is not None else GenerateSettings(mode="posterior")
+        writer = Writer(model, params, hands=hands)
+        straight = Writer(model, replace(params, method="straight"), hands=hands)
+        time_word(writer, straight, "warm")
         rng = random.Random(0)
         for length in args.lengths:
-            runs = [time_word(model, w, params) for w in words_of(length, args.reps, rng)]
+            runs = [time_word(writer, straight, w) for w in words_of(length, args.reps, rng)]
             row = {"family": family, "letters": length}
             for key in runs[0]:
                 row[key] = statistics.median(r[key] for r in runs)
@@ -197,7 +207,7 @@ def main() -> None:
                 flush=True,
             )
         if args.speech and family == args.families[0]:
-            speech += speech_rows(model, family, params, args.reps)
+            speech += speech_rows(model, hands, family, params, args.reps)
 
     print(
         f"\nWrite latency, label input -> DMP rollout, median of {args.reps} random words per "
@@ -247,7 +257,7 @@ def main() -> None:
         "settings": {
             "reps": args.reps,
             "threads": args.threads,
-            "generate": {k: str(v) for k, v in params.__dict__.items()},
+            "generate": {k: str(v) for k, v in GenerateSettings().__dict__.items()},
             "models": sources,
             "target_ms_6_letters": TARGET_MS,
             "target_rmse_mm": TARGET_RMSE_MM,

@@ -713,6 +713,10 @@ def likeness_markdown(evaluate: dict) -> str:
     rows = [m.groups() for k in evaluate if (m := pattern.match(k))]
     if not rows:
         return ""
+    families = ["real", *list(FAMILIES)]
+    modes = ["val_writers", "train_originals", "mean", "imputed", "sampled_t0.5", "sampled_t1"]
+    modes += ["hand_t0", "hand", "hand_t1"]
+    rows.sort(key=lambda r: (families.index(r[0]), modes.index(r[1]) if r[1] in modes else 99))
     body = []
     for family, mode in rows:
         name = "real letters" if family == "real" else family
@@ -734,6 +738,7 @@ def likeness_markdown(evaluate: dict) -> str:
     ]
     style = re.compile(r"^([^/]+)/style_k(\d+)_generated$")
     found = [m.groups() for k in evaluate if (m := style.match(k))]
+    found.sort(key=lambda r: (list(FAMILIES).index(r[0]) if r[0] in FAMILIES else 99, int(r[1])))
     if found:
         lines += [
             "",
