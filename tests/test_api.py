@@ -150,7 +150,7 @@ def test_a_style_writes_the_persons_own_letters_for_the_classes_they_gave(
 ):
     from prg import Writer
     from prg.pipeline.compose import GenerateSettings
-    from prg.pipeline.hands import decode_in_hand
+    from prg.pipeline.hands import decode_in_hand, decoder_bias
 
     writer = Writer.from_checkpoint(untrained_muse_checkpoint)
     own = writer.hands.traj[:2] * 0.5  # a person's "a" and "b", unlike any bank letter
@@ -159,7 +159,8 @@ def test_a_style_writes_the_persons_own_letters_for_the_classes_they_gave(
         untrained_muse_checkpoint, settings=settings, style=(own, "ab")
     ).write(text="ba")
     labels = np.array([char_to_label("b"), char_to_label("a")])
-    expected = decode_in_hand(writer.model, own[[1, 0]], labels, 0.0, settings.seed)
+    bias = decoder_bias(writer.model, writer.hands)
+    expected = decode_in_hand(writer.model, own[[1, 0]], labels, 0.0, settings.seed, bias)
     np.testing.assert_allclose(styled.letters, expected, atol=1e-6)
 
 

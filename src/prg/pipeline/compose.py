@@ -28,7 +28,7 @@ from prg.pipeline.word import DEFAULT_SPEED_CM_S, WordTrajectory, assemble_word
 
 log = logging.getLogger(__name__)
 
-CONNECTION_METHODS = ("alg1", "straight")
+CONNECTION_METHODS = ("hand", "alg1", "straight")
 DECODING_MODES = ("hand", "posterior")
 
 
@@ -87,7 +87,7 @@ class GenerateSettings:
         if self.mode not in DECODING_MODES:
             raise SettingsError("mode", f"{self.mode!r}: choose hand or posterior")
         if self.method not in CONNECTION_METHODS:
-            raise SettingsError("method", f"{self.method!r}: choose alg1 or straight")
+            raise SettingsError("method", f"{self.method!r}: choose hand, alg1 or straight")
         if not isinstance(self.delayed_strokes, bool):
             raise SettingsError(
                 "delayed_strokes", f"{self.delayed_strokes!r}: choose true or false"

@@ -464,7 +464,7 @@ def connection_path(prev, result: ConnectionResult, nxt) -> np.ndarray:
 def connect_sequence(
     letters,
     params: ConnectionSettings | None = None,
-    method: Literal["alg1", "straight"] = "alg1",
+    method: Literal["hand", "alg1", "straight"] = "alg1",
     breaks=None,
 ) -> list[ConnectionResult]:
     """Connections between every pair of consecutive letters.
@@ -475,7 +475,8 @@ def connect_sequence(
         Letters in writing order, already laid out (centimetres).
     params : ConnectionSettings, optional
         Defaults to ``ConnectionSettings()``.
-    method : {"alg1", "straight"}
+    method : {"hand", "alg1", "straight"}
+        :func:`prg.pipeline.joins.hand_connection` (Algorithm 1 unless it cuts through ink),
         :func:`connect_letters` or :func:`straight_connection` (which uses only ``params.delta``).
     breaks : sequence of bool, optional
         One per pair (:func:`prg.pipeline.layout.word_breaks`): True where a space separates the
@@ -487,8 +488,8 @@ def connect_sequence(
     list of ConnectionResult, length ``len(letters) - 1``
     """
     params = params or ConnectionSettings()
-    if method not in ("alg1", "straight"):
-        raise UsageError(f"method must be 'alg1' or 'straight', got {method!r}")
+    if method not in ("hand", "alg1", "straight"):
+        raise UsageError(f"method must be 'hand', 'alg1' or 'straight', got {method!r}")
     n_pairs = max(len(letters) - 1, 0)
     breaks = [False] * n_pairs if breaks is None else list(breaks)
     if len(breaks) != n_pairs:
@@ -497,7 +498,11 @@ def connect_sequence(
         )
     out = []
     for a, b, pen_up in zip(letters[:-1], letters[1:], breaks):
-        if method == "alg1" and not pen_up:
+        if method == "hand" and not pen_up:
+            from prg.pipeline.joins import hand_connection
+
+            out.append(hand_connection(a, b, letters, params))
+        elif method == "alg1" and not pen_up:
             out.append(connect_letters(a, b, **params.as_kwargs()))
         else:
             out.append(straight_connection(a, b, params.delta))

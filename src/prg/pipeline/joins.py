@@ -1,0 +1,199 @@
+"""Connection strokes that join letters as a hand does: they do not cut through the ink.
+
+The paper's Algorithm 1 (:func:`prg.pipeline.connect.connect_letters`) steers the pen from the
+end of a letter to the start of the next with bounded turns, but nothing keeps it off the ink:
+over 40 everyday words written by the demo MUSE, 46 % of its connections crossed a letter away
+from their ends ("little" read as "libble": the t ends at its foot and the connection climbs
+back up through its stem; an ``o`` entered at its top from below reads as an ``a``).
+
+:func:`hand_connection` keeps Algorithm 1's stroke when it crosses no ink, and otherwise writes
+the stroke a writer would: among a few smooth candidates — cubic curves leaving the letter along
+its last direction and entering the next along its first, straight on, arched over the letters
+or dipping under the baseline — the one that crosses no ink (fewest crossings if none is clear),
+then the shortest and least turning. Candidates are sampled every ``delta`` or less, so the
+connection keeps the no-gap guarantee of :mod:`prg.pipeline.connect`.
+
+:func:`ink_crossings` is the measure: proper intersections of a connection with the letters'
+ink, those within ``margin`` of the connection's two ends not counted (a stroke leaves and enters
+ink there).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from prg.pipeline.connect import ConnectionResult, ConnectionSettings, connect_letters
+
+#: Ink this close to a connection's ends (cm) is where it leaves and enters letters: not counted.
+END_MARGIN = 0.1
+
+
+def _segments_cross(a0, a1, b0, b1) -> np.ndarray:
+    """Proper intersections of segments ``a0 a1`` (n, 2) with ``b0 b1`` (m, 2): (n, m) bool.
+
+    Two segments cross when each one's ends lie strictly on opposite sides of the other's line
+    (touching or collinear overlap does not count)."""
+
+    def side(p, q, r):  # sign of the cross product (q - p) x (r - p), broadcast (n, m)
+        return np.sign(
+            (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1])
+            - (q[..., 1] - p[..., 1]) * (r[..., 0] - p[..., 0])
+        )
+
+    a0, a1 = a0[:, None, :], a1[:, None, :]
+    b0, b1 = b0[None, :, :], b1[None, :, :]
+    return (side(a0, a1, b0) * side(a0, a1, b1) < 0) & (side(b0, b1, a0) * side(b0, b1, a1) < 0)
+
+
+def ink_crossings(path: np.ndarray, inks: Sequence[np.ndarray], margin: float = END_MARGIN) -> int:
+    """How many times ``path`` crosses the ``inks`` away from its two ends.
+
+    Parameters
+    ----------
+    path : ndarray, shape (k, 2)
+        A connection from the end of one letter to the start of the next, both included.
+    inks : sequence of ndarray, each shape (n_i, 2)
+        The letters' strokes.
+    margin : float
+        Crossings closer than this to ``path[0]`` or ``path[-1]`` are not counted.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> stem = np.array([[1.0, -1.0], [1.0, 1.0]])
+    >>> ink_crossings(np.array([[0.0, 0.0], [2.0, 0.0]]), [stem])
+    1
+    >>> ink_crossings(np.array([[0.0, 0.0], [0.95, 0.0]]), [stem])
+    0
+    """
+    path = np.asarray(path, dtype=np.float64)
+    if len(path) < 2:
+        return 0
+    ends = path[[0, -1]]
+    total = 0
+    for ink in inks:
+        ink = np.asarray(ink, dtype=np.float64)
+        if len(ink) < 2:
+            continue
+        hits = _segments_cross(path[:-1], path[1:], ink[:-1], ink[1:])
+        if not hits.any():
+            continue
+        _, j = np.nonzero(hits)
+        # where the two segments meet, roughly: the middle of the ink segment
+        where = 0.5 * (ink[j] + ink[j + 1])
+        near = np.min(np.linalg.norm(where[:, None, :] - ends[None], axis=-1), axis=1)
+        total += int((near > margin).sum())
+    return total
+
+
+def _direction(points: np.ndarray, from_end: bool) -> np.ndarray:
+    """Unit direction of a letter's last (``from_end``) or first non-degenerate step."""
+    steps = np.diff(points[::-1] if from_end else points, axis=0)
+    steps = -steps if from_end else steps
+    for step in steps if len(steps) else []:
+        norm = math.hypot(*step)
+        if norm > 1e-9:
+            return step / norm
+    return np.array([1.0, 0.0])
+
+
+def _cubic(p0, p1, p2, p3, delta: float) -> np.ndarray:
+    """Points strictly between ``p0`` and ``p3`` on the cubic Bezier curve, gaps <= ``delta``."""
+    fine = np.linspace(0.0, 1.0, 400)[:, None]
+    curve = (
+        (1 - fine) ** 3 * p0 + 3 * (1 - fine) ** 2 * fine * p1 + 3 * (1 - fine) * fine**2 * p2
+    ) + fine**3 * p3
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(curve, axis=0), axis=1))])
+    n = max(1, math.ceil(arc[-1] / delta * 1.01))
+    s = np.linspace(0.0, arc[-1], n + 1)[1:-1]
+    return np.column_stack([np.interp(s, arc, curve[:, 0]), np.interp(s, arc, curve[:, 1])])
+
+
+def _candidates(prev: np.ndarray, nxt: np.ndarray, inks, delta: float) -> list[np.ndarray]:
+    """Smooth strokes from ``prev[-1]`` to ``nxt[0]`` (intermediate points only)."""
+    p0, p3 = prev[-1], nxt[0]
+    out_dir, in_dir = _direction(prev, True), _direction(nxt, False)
+    dist = max(math.hypot(*(p3 - p0)), delta)
+    # the ink between the two ends (in x, a little beyond): what an arch or a dip must clear
+    every = np.concatenate([np.asarray(i, dtype=np.float64) for i in inks])
+    low, high = min(p0[0], p3[0]) - 0.1, max(p0[0], p3[0]) + 0.1
+    between = every[(every[:, 0] >= low) & (every[:, 0] <= high)]
+    between = between if len(between) else np.stack([p0, p3])
+    clearance = 0.1 + 0.1 * dist
+    out = [_cubic(p0, p0 + (p3 - p0) / 3, p3 - (p3 - p0) / 3, p3, delta)]  # straight
+    for reach in (0.15, 0.35, 0.7, 1.2):
+        out.append(_cubic(p0, p0 + reach * dist * out_dir, p3 - reach * dist * in_dir, p3, delta))
+    top, bottom = between[:, 1].max(), between[:, 1].min()
+    levels = [top + clearance, top + 2.5 * clearance, bottom - clearance, bottom - 2.5 * clearance]
+    for level in levels:
+        # control points at the height that puts the curve's middle at ``level``
+        height = (level - (p0[1] + p3[1]) / 8) / 0.75
+        p1 = np.array([p0[0] + 0.3 * dist * out_dir[0], height])
+        p2 = np.array([p3[0] - 0.3 * dist * in_dir[0], height])
+        out.append(_cubic(p0, p1, p2, p3, delta))  # arched over the ink, or dipping under it
+    return out
+
+
+def _turning(path: np.ndarray) -> float:
+    steps = np.diff(path, axis=0)
+    steps = steps[np.linalg.norm(steps, axis=1) > 1e-12]
+    if len(steps) < 2:
+        return 0.0
+    angle = np.arctan2(steps[:, 1], steps[:, 0])
+    return float(np.abs(np.angle(np.exp(1j * np.diff(angle)))).sum())
+
+
+def hand_connection(
+    prev: np.ndarray,
+    nxt: np.ndarray,
+    inks: Sequence[np.ndarray],
+    params: ConnectionSettings | None = None,
+) -> ConnectionResult:
+    """A connection from ``prev[-1]`` to ``nxt[0]`` that crosses no ink when one can.
+
+    Parameters
+    ----------
+    prev, nxt : ndarray, shape (n, 2)
+        The letters before and after (laid out, centimetres).
+    inks : sequence of ndarray
+        The word's letters (``prev`` and ``nxt`` among them): the ink to stay off.
+    params : ConnectionSettings, optional
+
+    Returns
+    -------
+    ConnectionResult
+        Algorithm 1's connection when it crosses no ink; otherwise the candidate with the fewest
+        crossings, then the least ``length / distance + turning / pi``. ``steered`` counts
+        Algorithm 1's steered steps (0 for a candidate curve).
+    """
+    params = params or ConnectionSettings()
+    prev = np.asarray(prev, dtype=np.float64)
+    nxt = np.asarray(nxt, dtype=np.float64)
+    alg1 = connect_letters(prev, nxt, **params.as_kwargs())
+
+    def path_of(points):
+        return np.concatenate([prev[-1:], points, nxt[:1]])
+
+    if ink_crossings(path_of(alg1.points), inks) == 0:
+        return alg1
+    dist = max(math.hypot(*(nxt[0] - prev[-1])), params.delta)
+
+    def cost(points):
+        path = path_of(points)
+        length = float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
+        # the turns out of the letter and into the next count: a stroke that enters a stem
+        # from below to write it downwards reverses there
+        turns = _turning(np.concatenate([prev[-2:-1], path, nxt[1:2]]))
+        return (ink_crossings(path, inks), length / dist + turns / math.pi)
+
+    options = [alg1.points, *_candidates(prev, nxt, inks, params.delta)]
+    best = min(range(len(options)), key=lambda k: cost(options[k]))
+    if best == 0:
+        return alg1
+    return ConnectionResult(options[best], 0, 0, False)
