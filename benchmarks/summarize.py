@@ -343,6 +343,35 @@ def _simulate(d: dict) -> list[Row]:
     return rows
 
 
+def _connections(d: dict) -> list[Row]:
+    rows = []
+    reference = {r["decoding"]: r for r in d["rows"] if r["method"] == "alg1"}
+    for r in d["rows"]:
+        if r["method"] != "hand":
+            continue
+        ref = reference[r["decoding"]]
+        rows.append(
+            Row(
+                f"connections cutting a letter's ink, {r['words']} words ({r['decoding']} letters)",
+                f"{r['crossing']}/{r['connections']} ({r['crossing_share']:.0%})",
+                "the paper's Algorithm 1",
+                f"{ref['crossing']}/{ref['connections']} ({ref['crossing_share']:.0%})",
+                max(r["crossing"], 0.5) / max(ref["crossing"], 0.5),
+                "<= 10 %",
+            )
+        )
+        rows.append(
+            Row(
+                f"compose a word (layout, connections, DMP), {r['decoding']} letters",
+                f"{r['compose_ms_median']:.1f} ms",
+                "the paper's Algorithm 1",
+                f"{ref['compose_ms_median']:.1f} ms",
+                r["compose_ms_median"] / ref["compose_ms_median"],
+            )
+        )
+    return rows
+
+
 def _startup(d: dict) -> list[Row]:
     return [
         Row(
@@ -364,6 +393,7 @@ BENCHMARKS: dict[str, Callable[[dict], list[Row]]] = {
     "bench_dmp": _dmp,
     "bench_lasa": _lasa,
     "bench_write": _write_word,
+    "bench_connections": _connections,
     "bench_speech": _speech,
     "bench_speech_other_voices": _speech,
     "bench_speech_other_words": _speech,

@@ -503,7 +503,7 @@ def texts(draw, max_letters: int = 5):
 
 
 @examples(40)
-@given(data=st.data(), method=st.sampled_from(["alg1", "straight"]))
+@given(data=st.data(), method=st.sampled_from(["hand", "alg1", "straight"]))
 def test_a_word_from_any_letters_is_finite_continuous_and_bounded(data, method):
     text = data.draw(texts(max_letters=4))
     chars = text.replace(" ", "")

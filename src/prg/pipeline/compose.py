@@ -53,7 +53,9 @@ class GenerateSettings:
         (:meth:`prg.models.muse.MUSE.encode_imputed`; families without a joint posterior ignore
         it). 0 is the paper's decoding. The demo MUSE's letters from labels read right (folded
         coherence, whole test split) 0.68 with 0 rounds, 0.89 with 10, 0.94 with 20.
-    method : ``"alg1"`` (the paper's connection algorithm) or ``"straight"``.
+    method : ``"hand"`` (default: the paper's Algorithm 1 unless its stroke cuts through a
+        letter, then a smooth stroke that keeps off the ink, :mod:`prg.pipeline.joins`),
+        ``"alg1"`` (the paper's connection algorithm) or ``"straight"``.
     speed_cm_s : mean pen speed over the word; ``ramp_s`` : start/stop ramp duration.
     samples_per_s : DMP demonstration samples per second of writing.
     basis_per_100_samples : DMP basis functions per 100 demonstration samples. Words from the
@@ -72,7 +74,7 @@ class GenerateSettings:
     seed: int = 0
     hand_seed: int | None = None
     impute_steps: int = 20
-    method: str = "alg1"
+    method: str = "hand"
     speed_cm_s: float = DEFAULT_SPEED_CM_S
     ramp_s: float = 0.3
     samples_per_s: float = 100.0
