@@ -105,6 +105,7 @@ bench: setup ## Run the benchmarks (tables printed, JSON under benchmarks/result
 	$(BIN)/python benchmarks/bench_lasa.py
 	$(BIN)/python benchmarks/bench_write.py --speech
 	$(BIN)/python benchmarks/bench_connections.py
+	$(BIN)/python benchmarks/bench_kinematics.py
 	$(BIN)/python benchmarks/bench_speech.py
 	$(BIN)/python benchmarks/bench_speech.py $(SPEECH_OTHER_VOICES) \
 		--out benchmarks/results/bench_speech_other_voices.json

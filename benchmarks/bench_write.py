@@ -54,7 +54,7 @@ from prg.files import write_json
 from prg.models.checkpoint import load_model
 from prg.pipeline.compose import GenerateSettings
 from prg.pipeline.decode import label_inputs, usable_inputs
-from prg.pipeline.timing import rest_to_rest_samples
+from prg.pipeline.timing import timed_body
 from prg.writer import Perception, Writer
 
 RESULTS = Path(__file__).parent / "results"
@@ -107,9 +107,7 @@ def time_word(writer: Writer, straight: Writer, text: str) -> dict:
     start = time.perf_counter()
     straight.generate(Perception(text, inputs))
     total_straight = time.perf_counter() - start
-    samples, _ = rest_to_rest_samples(
-        word.body, params.speed_cm_s, params.ramp_s, params.samples_per_s
-    )
+    samples, _ = timed_body(word.body, params)
     error = np.linalg.norm(path - samples, axis=1) * 10  # mm
     return {
         "decode_ms": decode * 1000,
@@ -215,7 +213,7 @@ def main() -> None:
         f"demonstration (median / worst of the words)"
     )
     header = (
-        f"{'family':>8}{'letters':>8} | {'alg1':>8}{'decode':>8}{'ratio':>7} | "
+        f"{'family':>8}{'letters':>8} | {'default':>8}{'decode':>8}{'ratio':>7} | "
         f"{'straight':>9}{'ratio':>7} | {'RMSE mm':>8}{'worst':>7}{'max mm':>8} | {'basis':>6}"
     )
     print(header)

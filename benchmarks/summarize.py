@@ -372,6 +372,34 @@ def _connections(d: dict) -> list[Row]:
     return rows
 
 
+def _kinematics(d: dict) -> list[Row]:
+    table = d["table"]
+    lasa, executed = table["LASA (human)"], table["human: executed"]
+    paper = table["constant: executed"]
+    noise = table["control: white noise"]
+    targets = d["settings"]["targets"]
+    names = {
+        "beta": "speed-curvature power law beta",
+        "speed_cv": "speed coefficient of variation",
+        "lognormal_snr_db": "sigma-lognormal fit SNR (dB)",
+    }
+    rows = []
+    for key, name in names.items():
+        low, high = targets[key]
+        rows.append(
+            Row(
+                f"{name}, executed pen tip, {len(d['settings']['words'])} words (the paper's "
+                f"constant speed {paper[key]['median']:.2f}; white noise {noise[key]['median']:.2f})",
+                f"{executed[key]['median']:.3f}",
+                "LASA human demonstrations",
+                f"{lasa[key]['median']:.3f}",
+                executed[key]["median"] / lasa[key]["median"],
+                f">= {low:g}" + (f", <= {high:g}" if high is not None else ""),
+            )
+        )
+    return rows
+
+
 def _startup(d: dict) -> list[Row]:
     return [
         Row(
@@ -394,6 +422,7 @@ BENCHMARKS: dict[str, Callable[[dict], list[Row]]] = {
     "bench_lasa": _lasa,
     "bench_write": _write_word,
     "bench_connections": _connections,
+    "bench_kinematics": _kinematics,
     "bench_speech": _speech,
     "bench_speech_other_voices": _speech,
     "bench_speech_other_words": _speech,

@@ -46,13 +46,13 @@ def word_figure(writer, path: Path) -> str:
     the body's DMP rollout by time and the delayed strokes after it."""
     from matplotlib.collections import LineCollection
 
-    from prg.pipeline.timing import rest_to_rest_samples
+    from prg.pipeline.timing import timed_body
     from prg.plotting import pyplot
 
     result = writer.write(text=WORD)
     word, rollout = result.word, result.rollout
     p = writer.settings
-    target, _ = rest_to_rest_samples(word.body, p.speed_cm_s, p.ramp_s, p.samples_per_s)
+    target, _ = timed_body(word.body, p)
     rmse_mm = 10 * float(np.sqrt(np.mean(np.sum((rollout - target) ** 2, axis=1))))
     plt = pyplot()
     fig, (left, right) = plt.subplots(1, 2, figsize=(9, 3), dpi=100, layout="constrained")

@@ -12,7 +12,7 @@ from prg.models.cvae import CVAE
 from prg.models.muse import MUSE
 from prg.pipeline.compose import GenerateSettings, clean_text
 from prg.pipeline.decode import decode_letters, infer_text, label_inputs, usable_inputs
-from prg.pipeline.timing import rest_to_rest_samples
+from prg.pipeline.timing import rest_to_rest_samples, timed_body
 from prg.writer import Perception, Writer
 from tests.conftest import stand_in_hands
 
@@ -78,7 +78,7 @@ def test_a_word_is_laid_out_connected_and_reproduced_by_one_dmp():
     assert [c for c, _ in word.letters] == list("abcd")
     assert word.segment_kinds.count("connection") == 2 and word.segment_kinds.count("space") == 1
     assert word.dmp.n_basis >= 20 and word.duration_s > 0
-    demo, _ = rest_to_rest_samples(word.body, word.speed_cm_s, 0.3, 150)
+    demo, _ = timed_body(word.body, result.settings)
     assert path.shape == demo.shape
     rmse = np.sqrt(((path - demo) ** 2).sum(1).mean())
     # cm: untrained decoders give jittery letters (measured 0.07); a quick AVAE(T,S) "hello

@@ -54,7 +54,7 @@ from prg.pipeline.dmp import fit_dmp, rollout
 from prg.pipeline.layout import layout_letters
 from prg.pipeline.marks import MarkSettings
 from prg.pipeline.perceive import perceive_trajectories
-from prg.pipeline.timing import rest_to_rest_samples
+from prg.pipeline.timing import timed_body
 
 SCALE = float(os.environ.get("PRG_PROPERTY_SCALE", "1"))
 
@@ -537,7 +537,7 @@ def test_a_word_from_any_letters_is_finite_continuous_and_bounded(data, method):
     # the DMP rollout follows the timed path: same start, no jump, close everywhere (the DMP
     # section's bounds; measured worst deviation here 0.33 steps, 4.3 for letters of 100 random
     # points)
-    demo, _ = rest_to_rest_samples(points, params.speed_cm_s, params.ramp_s, params.samples_per_s)
+    demo, _ = timed_body(points, params)
     assert path.shape == demo.shape
     np.testing.assert_array_equal(path[0], points[0])
     largest = steps(demo).max()

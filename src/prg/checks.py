@@ -112,6 +112,7 @@ GENERATE_RANGES: dict[str, Range] = {  # prg.pipeline.compose.GenerateSettings
     "temperature": TEMPERATURE,
     "seed": SEED,
     "impute_steps": count(0, 1000),
+    "speed_variation": non_negative(2),
     "speed_cm_s": positive(1000),
     "ramp_s": non_negative(60),
     "samples_per_s": positive(10_000),

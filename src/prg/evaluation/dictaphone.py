@@ -24,7 +24,7 @@ from prg.alphabet import char_to_label
 from prg.errors import UsageError
 from prg.files import atomic_path
 from prg.pipeline.speech import SAMPLE_RATE
-from prg.pipeline.timing import rest_to_rest_samples
+from prg.pipeline.timing import timed_body
 from prg.pipeline.word import WordTrajectory
 from prg.plotting import MARK, hex_colour, pyplot
 from prg.writer import Writer, WriteResult
@@ -66,10 +66,7 @@ def letter_images(test: dict[str, np.ndarray], word: str) -> list[np.ndarray]:
 
 def dmp_rmse_mm(result: WriteResult) -> float:
     """RMSE (mm) of the DMP rollout against the timed demonstration it was fitted to."""
-    settings = result.settings
-    samples, _ = rest_to_rest_samples(
-        result.word.body, settings.speed_cm_s, settings.ramp_s, settings.samples_per_s
-    )
+    samples, _ = timed_body(result.word.body, result.settings)
     return float(np.sqrt(np.mean(np.sum((result.rollout - samples) ** 2, axis=1))) * 10)
 
 

@@ -23,12 +23,13 @@ from prg.pipeline.connect import ConnectionSettings, connect_sequence
 from prg.pipeline.dmp import basis_count, fit_dmp, rollout
 from prg.pipeline.layout import LayoutSettings, layout_letters, word_breaks
 from prg.pipeline.marks import MarkSettings, letter_marks
-from prg.pipeline.timing import rest_to_rest_samples, stroke_duration
+from prg.pipeline.timing import stroke_duration, timed_body
 from prg.pipeline.word import DEFAULT_SPEED_CM_S, WordTrajectory, assemble_word
 
 log = logging.getLogger(__name__)
 
 CONNECTION_METHODS = ("hand", "alg1", "straight")
+TIMINGS = ("human", "constant")
 DECODING_MODES = ("hand", "posterior")
 
 
@@ -56,6 +57,11 @@ class GenerateSettings:
     method : ``"hand"`` (default: the paper's Algorithm 1 unless its stroke cuts through a
         letter, then a smooth stroke that keeps off the ink, :mod:`prg.pipeline.joins`),
         ``"alg1"`` (the paper's connection algorithm) or ``"straight"``.
+    timing : ``"human"`` (default): the pen slows in curves (the speed-curvature power law,
+        beta 1/3) and some strokes go faster than others (``speed_variation``, seeded by
+        ``seed``) (:func:`prg.pipeline.timing.human_samples`); ``"constant"``: the paper's
+        constant speed between ramps. Both take ``length / speed_cm_s`` seconds.
+    speed_variation : strength of the stroke-to-stroke speed variation (0: none).
     speed_cm_s : mean pen speed over the word; ``ramp_s`` : start/stop ramp duration.
     samples_per_s : DMP demonstration samples per second of writing.
     basis_per_100_samples : DMP basis functions per 100 demonstration samples. Words from the
@@ -75,6 +81,8 @@ class GenerateSettings:
     hand_seed: int | None = None
     impute_steps: int = 20
     method: str = "hand"
+    timing: str = "human"
+    speed_variation: float = 0.15
     speed_cm_s: float = DEFAULT_SPEED_CM_S
     ramp_s: float = 0.3
     samples_per_s: float = 100.0
@@ -88,6 +96,8 @@ class GenerateSettings:
         check_ranges(self, GENERATE_RANGES)
         if self.mode not in DECODING_MODES:
             raise SettingsError("mode", f"{self.mode!r}: choose hand or posterior")
+        if self.timing not in TIMINGS:
+            raise SettingsError("timing", f"{self.timing!r}: choose human or constant")
         if self.method not in CONNECTION_METHODS:
             raise SettingsError("method", f"{self.method!r}: choose hand, alg1 or straight")
         if not isinstance(self.delayed_strokes, bool):
@@ -128,9 +138,7 @@ def compose_word(
     word = assemble_word(
         placed, connections, text, speed_cm_s=params.speed_cm_s, marks=[m for *_, m in marks]
     )
-    samples, duration = rest_to_rest_samples(
-        word.points[: word.body_end], params.speed_cm_s, params.ramp_s, params.samples_per_s
-    )
+    samples, duration = timed_body(word.points[: word.body_end], params)
     n_basis = basis_count(len(samples), per_100_points=params.basis_per_100_samples)
     dmp = fit_dmp(samples, tau=duration, n_basis=n_basis, velocities="rest")  # a pen at rest
     word.dmp = dmp

@@ -76,11 +76,12 @@ def ink_crossings(path: np.ndarray, inks: Sequence[np.ndarray], margin: float = 
     if len(path) < 2:
         return 0
     ends = path[[0, -1]]
+    low, high = path.min(0), path.max(0)
     total = 0
     for ink in inks:
         ink = np.asarray(ink, dtype=np.float64)
-        if len(ink) < 2:
-            continue
+        if len(ink) < 2 or (ink.max(0) < low).any() or (ink.min(0) > high).any():
+            continue  # the boxes do not overlap: no crossing
         hits = _segments_cross(path[:-1], path[1:], ink[:-1], ink[1:])
         if not hits.any():
             continue

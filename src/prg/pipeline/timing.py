@@ -1,5 +1,10 @@
 """Timing: a word's path resampled uniformly in time, starting and ending at rest.
 
+A hand does not move at constant speed: it slows in curves (the speed-curvature power law) and
+writes some strokes faster than others. :func:`human_samples` (the default, through
+:func:`timed_body`) times the word that way; :func:`rest_to_rest_samples` is the paper's
+constant speed between ramps (``generate.timing=constant``).
+
 A DMP starts and ends at rest, so the word is not fitted at constant pen speed (its first
 samples would need an initial velocity the DMP does not have: an error of about 3 % of the
 path length near the start). :func:`rest_to_rest_samples` resamples the path uniformly in time
@@ -16,9 +21,12 @@ flicking it.
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy.ndimage import gaussian_filter1d
+from scipy.signal import savgol_filter
 
 from prg.errors import UsageError
 
@@ -60,6 +68,177 @@ def rest_to_rest_samples(
     duration = length / speed_cm_s
     ramp = min(ramp_s, duration / 2)
     plateau = length / (duration - ramp)
+    n = _sample_count(length, speed_cm_s, samples_per_s)
+    t = np.linspace(0.0, duration, n)
+    s = plateau * _ramped_distance(t, duration, ramp)
+    s = np.clip(s * length / s[-1], 0.0, length)
+    x = np.interp(s, arc, points[:, 0])
+    y = np.interp(s, arc, points[:, 1])
+    return np.stack([x, y], axis=1), duration
+
+
+#: The speed-curvature power law's exponent of human drawing and cursive writing (Lacquaniti,
+#: Terzuolo & Viviani 1983): the pen slows in curves, v = K kappa^(-1/3).
+POWER_LAW_BETA = 1.0 / 3.0
+#: Curvature (1/cm) outside this range is clipped: a straight run does not race, a cusp does
+#: not stop the pen.
+CURVATURE_RANGE = (0.05, 20.0)
+#: The Savitzky-Golay window (cubic, seconds) of the derivatives that measure a path's speed and
+#: curvature. At 0.3 s the speed-curvature estimator of :mod:`prg.evaluation.kinematics` gives
+#: the reference values quoted for it: beta median 0.14 on the LASA demonstrations, about 0.25
+#: on white noise (0.05 s: -0.01 and 0.23); shorter windows see the decoded letters' polyline
+#: corners instead of the movement's curvature.
+WINDOW_S = 0.3
+CURVATURE_DT = 0.01  # s: the clock's samples when the curvature is measured
+#: The speed profile is smoothed over this much path (cm), as a hand does not change speed in
+#: an instant: with 0.05 the Panda's joint 4 needed its timing slowed 1.004x on the Hershey
+#: word "h i" (acceleration limit), with 0.1 not; the power law's beta measured on 10 demo words
+#: went from 0.24 to 0.22 (0.2: 0.19).
+SPEED_SMOOTH_CM = 0.1
+#: Curvature (1/cm, the path's own at 0.2 mm) above which a point is a cusp where the pen turns
+#: back (the foot of a Hershey h): the pen slows there whatever the movement-scale curvature
+#: says, or the arm's joints accelerate past their limits (Panda joint 4 on "h i": 1.07x).
+CUSP_KAPPA = 40.0
+#: The pen's largest speed-up or slow-down along its path (cm/s^2).
+MAX_PEN_ACCEL = 30.0
+POWER_LAW_PASSES = 3  # the timing and the curvature it measures agree after a few passes
+
+
+def speed_and_curvature(
+    xy: np.ndarray, dt: float, window_s: float = WINDOW_S
+) -> tuple[np.ndarray, np.ndarray]:
+    """Speed and curvature of a path sampled every ``dt`` seconds (Savitzky-Golay derivatives,
+    cubic, ``window_s`` seconds, at least 5 samples), each shape (n,)."""
+    xy = np.asarray(xy, dtype=np.float64)
+    if len(xy) < 5:
+        return np.zeros(len(xy)), np.zeros(len(xy))
+    window = min(max(5, round(window_s / dt) | 1), len(xy) - (1 - len(xy) % 2))
+    vel = savgol_filter(xy, window, 3, deriv=1, delta=dt, axis=0)
+    acc = savgol_filter(xy, window, 3, deriv=2, delta=dt, axis=0)
+    speed = np.linalg.norm(vel, axis=1)
+    cross = np.abs(vel[:, 0] * acc[:, 1] - vel[:, 1] * acc[:, 0])
+    return speed, cross / np.maximum(speed, 1e-12) ** 3
+
+
+def human_samples(
+    points: np.ndarray,
+    speed_cm_s: float,
+    ramp_s: float,
+    samples_per_s: float,
+    seed: int = 0,
+    variation: float = 0.25,
+    beta: float = POWER_LAW_BETA,
+) -> tuple[np.ndarray, float]:
+    """Resample a path uniformly in time under a hand's speed profile.
+
+    The speed follows the speed-curvature power law ``v = K kappa^(-beta)`` (the pen slows in
+    curves and speeds up on straighter parts), the curvature measured on the path as the timing
+    itself draws it, at the time scale of a movement (:func:`speed_and_curvature`, a few passes
+    until the two agree) and clipped to :data:`CURVATURE_RANGE`;
+    it is modulated stroke by stroke by a smooth random factor ``exp(variation * g(s))``
+    (``g`` Gaussian noise smoothed over 0.8 cm of path, unit std, seeded): people write some
+    strokes faster than others. The pen starts and ends at rest (the hand's clock run through
+    the half-cosine ramps of ``ramp_s`` seconds of :func:`rest_to_rest_samples`), and the whole
+    is scaled so that the duration is the constant-speed one, ``length / speed_cm_s``: the word
+    takes no longer than at the paper's constant speed.
+
+    Parameters
+    ----------
+    points : ndarray, shape (P, 2)
+        The path (centimetres).
+    speed_cm_s : float
+        Mean speed over the whole path (> 0).
+    ramp_s : float
+        Duration of the start and stop envelopes (>= 0).
+    samples_per_s : float
+        Output samples per second (> 0).
+    seed : int
+        Seeds the stroke-to-stroke variation.
+    variation : float
+        Its strength (0: the power law alone).
+    beta : float
+        The power law's exponent.
+
+    Returns
+    -------
+    samples : ndarray, shape (n, 2)
+    duration : float
+        Seconds: ``length / speed_cm_s``.
+    """
+    points = np.asarray(points, dtype=np.float64)
+    steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    arc = np.concatenate([[0.0], np.cumsum(steps)])
+    length = arc[-1]
+    if length <= 0:
+        raise UsageError("the word trajectory has zero length: nothing to write")
+    duration = length / speed_cm_s
+    n = _sample_count(length, speed_cm_s, samples_per_s)
+    ds = 0.005  # cm: the path resampled finely, equal steps
+    fine = max(int(np.ceil(length / ds)) + 1, 8)
+    s = np.linspace(0.0, length, fine)
+    ds = s[1] - s[0]
+    factor = np.ones(fine)
+    if variation > 0:
+        sigma = 0.8 / ds
+        g = gaussian_filter1d(np.random.default_rng(seed).normal(size=fine), sigma, mode="wrap")
+        # unit std for white noise so smoothed (a constant, not this path's own std: a path
+        # shorter than the smoothing keeps a near-constant factor, which the duration cancels)
+        factor = np.exp(variation * g * math.sqrt(2.0 * math.sqrt(math.pi) * sigma))
+    # the path's own curvature at 0.2 mm: a cusp (the foot of an h, where the pen turns back)
+    # must slow the pen, though the movement-scale curvature below smears it out
+    fine_xy = np.column_stack([np.interp(s, arc, points[:, 0]), np.interp(s, arc, points[:, 1])])
+    heading = np.unwrap(np.arctan2(*np.gradient(fine_xy, axis=0)[:, ::-1].T))
+    cusp = np.abs(gaussian_filter1d(np.gradient(heading, ds), 0.02 / ds, mode="nearest"))
+    own = s / speed_cm_s  # the hand's own clock along the path, first at constant speed
+    for _ in range(POWER_LAW_PASSES):
+        # the curvature of the path as this clock draws it, at the scale of a movement (the
+        # derivatives' window in time): where a hand's power law holds, not at the jitter of
+        # the decoded points
+        grid = np.arange(0.0, own[-1], CURVATURE_DT)
+        at = np.interp(grid, own, s)
+        xy = np.column_stack([np.interp(at, arc, points[:, 0]), np.interp(at, arc, points[:, 1])])
+        _, kappa = speed_and_curvature(xy, CURVATURE_DT)
+        kappa = np.interp(s, at, kappa)
+        kappa = np.where(cusp > CUSP_KAPPA, np.maximum(kappa, cusp), kappa)
+        speed = np.clip(kappa, *CURVATURE_RANGE) ** (-beta) * factor
+        speed = np.exp(gaussian_filter1d(np.log(speed), SPEED_SMOOTH_CM / ds, mode="nearest"))
+        own = _clock(speed, ds, duration)
+    for _ in range(2):  # limit the pen's speed-up and slow-down (cm/s^2), then keep the duration
+        speed = _limit_acceleration(ds / np.maximum(np.diff(own), 1e-12), ds, MAX_PEN_ACCEL)
+        speed = np.concatenate([speed, speed[-1:]])
+        own = _clock(speed, ds, duration)
+    # rest at both ends: the hand's clock is run through the same half-cosine ramps in time as
+    # the constant profile's (rest_to_rest_samples), so the pen starts and stops smoothly
+    ramp = min(ramp_s, duration / 2)
+    clock = _ramped_distance(np.linspace(0.0, duration, n), duration, ramp)
+    s_at = np.interp(clock * own[-1] / clock[-1], own, s)
+    return np.column_stack(
+        [np.interp(s_at, arc, points[:, 0]), np.interp(s_at, arc, points[:, 1])]
+    ), duration
+
+
+def _clock(speed: np.ndarray, ds: float, duration: float) -> np.ndarray:
+    """Times at which a pen moving at ``speed`` (per step ``ds``) reaches each step, scaled to
+    ``duration``."""
+    own = np.concatenate([[0.0], np.cumsum(ds / (0.5 * (speed[1:] + speed[:-1])))])
+    return own * (duration / own[-1])
+
+
+def _limit_acceleration(speed: np.ndarray, ds: float, accel: float) -> np.ndarray:
+    """``speed`` (cm/s, per path step ``ds``) lowered where it would change faster than
+    ``accel`` (cm/s^2): the forward and backward passes of v dv/ds <= accel (a time-optimal
+    planner's, here only to cap what the power law asks near cusps)."""
+    v = speed.astype(np.float64).copy()
+    reach = 2.0 * accel * ds
+    for i in range(1, len(v)):  # speeding up
+        v[i] = min(v[i], math.sqrt(v[i - 1] ** 2 + reach))
+    for i in range(len(v) - 2, -1, -1):  # slowing down
+        v[i] = min(v[i], math.sqrt(v[i + 1] ** 2 + reach))
+    return v
+
+
+def _sample_count(length: float, speed_cm_s: float, samples_per_s: float) -> int:
+    duration = length / speed_cm_s
     n = max(3, int(np.ceil(duration * samples_per_s)) + 1)
     if n > MAX_DMP_SAMPLES:  # the DMP fit's time and memory grow with n squared
         raise UsageError(
@@ -67,12 +246,26 @@ def rest_to_rest_samples(
             f"generate.samples_per_s={samples_per_s:g} its DMP would take {n:,} samples "
             f"({duration:.0f} s); accepted are at most {MAX_DMP_SAMPLES:,}: write faster or less"
         )
-    t = np.linspace(0.0, duration, n)
-    s = plateau * _ramped_distance(t, duration, ramp)
-    s = np.clip(s * length / s[-1], 0.0, length)
-    x = np.interp(s, arc, points[:, 0])
-    y = np.interp(s, arc, points[:, 1])
-    return np.stack([x, y], axis=1), duration
+    return n
+
+
+def timed_body(points: np.ndarray, settings) -> tuple[np.ndarray, float]:
+    """The word's body resampled uniformly in time as ``settings``
+    (:class:`~prg.pipeline.compose.GenerateSettings`) times it: :func:`human_samples` (the
+    default, ``timing="human"``, seeded by ``settings.seed``) or :func:`rest_to_rest_samples`
+    (the paper's constant speed, ``timing="constant"``). The DMP is fitted to these samples."""
+    if settings.timing == "constant":
+        return rest_to_rest_samples(
+            points, settings.speed_cm_s, settings.ramp_s, settings.samples_per_s
+        )
+    return human_samples(
+        points,
+        settings.speed_cm_s,
+        settings.ramp_s,
+        settings.samples_per_s,
+        seed=settings.seed,
+        variation=settings.speed_variation,
+    )
 
 
 def _ramped_distance(t: np.ndarray, duration: float, ramp: float) -> np.ndarray:
