@@ -51,6 +51,7 @@ from studies.stimuli import (
     RenderStyle,
     Sample,
     generate_robot_words,
+    held_out_words,
     load_human_samples,
     load_robot_words,
     render_sample,
@@ -283,6 +284,7 @@ def build_study(
     out_dir: str | Path | None = None,
     progress: Callable[[str], None] | None = None,
     pilot: bool = False,
+    pilot_data: str | Path | None = None,
 ) -> BuildReport:
     """Build the study's web folder (see the module docstring).
 
@@ -304,8 +306,12 @@ def build_study(
         Called with one line per step.
     pilot : bool
         A pilot build (see the module docstring): missing human samples are filled with
-        stand-ins made from the robot's (:func:`studies.stimuli.stand_ins`) so the pages can be
+        held-out writers' words (:func:`studies.stimuli.held_out_words`, from ``pilot_data``)
+        or, without that dataset, stand-ins made from the robot's
+        (:func:`studies.stimuli.stand_ins`), so the pages (and ``prg-study judge``) can be
         tried before the human writers have written; default folder ``studies/<name>/pilot``.
+    pilot_data : path, optional
+        A prepared dataset folder (its ``test.npz``) for a pilot's human words.
 
     Returns
     -------
@@ -332,7 +338,7 @@ def build_study(
         pilot_copy = "../pilot/index.html"
     with staged_folder(out) as staging:
         report = _build_into(
-            staging, config, style, human_dirs, robot_dir, ckpt, say, pilot, pilot_copy
+            staging, config, style, human_dirs, robot_dir, ckpt, say, pilot, pilot_copy, pilot_data
         )
     report.out_dir = out
     return report
@@ -348,6 +354,7 @@ def _build_into(
     say: Callable[[str], None],
     pilot: bool,
     pilot_copy: str | None,
+    pilot_data: str | Path | None = None,
 ) -> BuildReport:
     # human samples first: a bad folder or file fails before the model runs
     dirs = [*(config.human.get("dirs") or []), *human_dirs]
@@ -382,6 +389,7 @@ def _build_into(
             overrides=config.robot["write_overrides"],
             progress=say,
             delayed_strokes=delayed,
+            hand_per_word=config.robot["hands"] == "per_word",
         )
         robot = load_robot_words(sources, config.words, delayed_strokes=delayed)
 
@@ -394,10 +402,26 @@ def _build_into(
             "rebuild with --human DIR (or list the folders in human.dirs)"
         ]
     n_stand_ins = 0
-    if pilot:  # stand-ins for the missing writers
+    if pilot:  # stand-ins for the missing writers: held-out writers' letters, or the robot's
+        short = {w: max(0, config.human_writers - len(writers[w])) for w in config.words}
+        data = Path(pilot_data) if pilot_data is not None else None
+        if data is not None and (data / "test.npz").is_file() and max(short.values()) > 0:
+            made = held_out_words(
+                config.words,
+                max(short.values()),
+                data,
+                root / "sources" / "pilot",
+                config.seed,
+                delayed_strokes=delayed,
+            )
+            filled = {w: made[w][: short[w]] for w in config.words}
+        else:
+            filled = {
+                w: stand_ins(robot[w], short[w], config.seed, delayed_strokes=delayed)
+                for w in config.words
+            }
         for word in config.words:
-            short = max(0, config.human_writers - len(writers[word]))
-            for sample in stand_ins(robot[word], short, config.seed, delayed_strokes=delayed):
+            for sample in filled[word]:
                 humans.by_word[word][sample.writer_id] = sample
                 writers[word].append(sample.writer_id)
                 n_stand_ins += 1

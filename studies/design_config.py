@@ -176,7 +176,13 @@ class StudySettings:
 
 
 _SECTIONS = {
-    "robot": {"family": "muse", "ckpt": None, "dir": None, "write_overrides": []},
+    "robot": {
+        "family": "muse",
+        "ckpt": None,
+        "dir": None,
+        "write_overrides": [],
+        "hands": "per_word",
+    },
     "render": {},
     "human": {"dirs": [], "accept_lifted": False},
     "page": {},
@@ -282,6 +288,8 @@ def _check_sections(sections: dict) -> None:
     for key in ("ckpt", "dir"):
         if robot[key] is not None and not (isinstance(robot[key], str) and robot[key].strip()):
             raise UsageError(f"robot.{key} must be a path or null, got {robot[key]!r}")
+    if robot["hands"] not in ("per_word", "one"):
+        raise UsageError(f"robot.hands must be per_word or one, got {robot['hands']!r}")
     overrides = robot["write_overrides"]
     if not isinstance(overrides, list) or not all(isinstance(o, str) for o in overrides):
         raise UsageError(

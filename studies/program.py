@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import NoReturn
 
 from prg.commands.cli import check_output, handle_signals, os_error_message
@@ -27,6 +28,10 @@ class Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{PROG}: error: {' '.join(message.split())}\n")
+
+
+#: Where a pilot build looks for held-out writers' letters (relative to the working directory).
+DEFAULT_PILOT_DATA = Path("data") / "prepared" / "synthetic"
 
 
 def _say(line: str) -> None:
@@ -48,6 +53,7 @@ def build_command(args: argparse.Namespace) -> int:
         out_dir=out,
         progress=None if args.quiet else _say,
         pilot=args.pilot,
+        pilot_data=args.pilot_data,
     )
     for note in report.notes:
         _say(f"note: {note}")
@@ -125,11 +131,49 @@ def _add_build(subparsers) -> None:
         "--pilot",
         action="store_true",
         help="a pilot copy (default folder studies/<name>/pilot): missing human samples are "
-        "filled with stand-ins made from the robot's, to try the pages before the human "
-        "writers have written; every page says PILOT, answers are marked pilot, never POSTed",
+        "filled with held-out writers' words from --pilot-data (else stand-ins made from the "
+        "robot's), to try the pages before the human writers have written; every page says "
+        "PILOT, answers are marked pilot, never POSTed",
+    )
+    p.add_argument(
+        "--pilot-data",
+        metavar="DIR",
+        default=str(DEFAULT_PILOT_DATA),
+        help="prepared dataset whose test-split writers write a pilot's human words "
+        f"(default {DEFAULT_PILOT_DATA})",
     )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=build_command)
+
+
+def judge_command(args: argparse.Namespace) -> int:
+    """``prg-study judge``: see :func:`studies.judge.judge`."""
+    from studies.judge import judge, summary_lines
+
+    if args.options < 2:
+        raise UsageError(f"--options {args.options}: give 2 or more (the robot and the humans)")
+    result = judge(args.folder, n_options=args.options, seed=args.seed)
+    for line in summary_lines(result):
+        _say(line)
+    _say(f"wrote {Path(args.folder) / 'judge.json'}")
+    return 0
+
+
+def _add_judge(subparsers) -> None:
+    p = subparsers.add_parser(
+        "judge",
+        help="score a built study's stimuli before any participant: a classifier two-sample "
+        "test and a simulated observer",
+        description=(
+            "Does a built study give the robot away? A classifier two-sample test (robot words "
+            "against the study's human words, on trajectories and on the rendered images) and "
+            "a simulated observer for the Turing question; writes judge.json in the folder."
+        ),
+    )
+    p.add_argument("folder", help="a built study, e.g. studies/turing/pilot")
+    p.add_argument("--options", type=int, default=5, help="samples per trial (default 5)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the simulated trials")
+    p.set_defaults(func=judge_command)
 
 
 Registrar = Callable[[argparse._SubParsersAction], None]  #: adds sub-commands to a parser
@@ -144,6 +188,7 @@ def make_parser(*registrars: Registrar) -> Parser:
     )
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
     _add_build(subparsers)
+    _add_judge(subparsers)
     for register in registrars:
         register(subparsers)
     return parser

@@ -643,6 +643,66 @@ def load_human_samples(
     return out
 
 
+def held_out_words(
+    words: Sequence[str],
+    n: int,
+    data_dir: str | Path,
+    out_dir: str | Path,
+    seed: int = 0,
+    delayed_strokes: bool = True,
+) -> dict[str, list[Sample]]:
+    """Human words for a pilot: ``n`` writers of the dataset's test and validation splits
+    (people no model was trained on) per word, each word made of that writer's own letters, laid out and joined the way the
+    robot's are (:func:`prg.pipeline.compose.compose_word` with ``prg-write``'s settings), so
+    that what tells them apart is the letters and the hand, not the joining. Writers who did
+    not write every letter of a word are skipped for it. Each word is saved as
+    ``<out_dir>/<writer>/<word>.json`` (its sample's origin).
+
+    Raises
+    ------
+    UsageError
+        If the splits cannot be read, or fewer than ``n`` writers wrote a word's letters.
+    """
+    from dataclasses import replace
+
+    from prg.alphabet import char_to_label
+    from prg.data.store import load_split
+    from prg.pipeline.compose import GenerateSettings, compose_word
+
+    splits = [load_split(Path(data_dir) / f"{name}.npz") for name in ("test", "val")]
+    keep = [~split["augmented"] for split in splits]
+    traj = np.concatenate([sp["traj"][k] for sp, k in zip(splits, keep, strict=True)])
+    traj = traj.reshape(len(traj), -1, 2)
+    labels = np.concatenate([sp["label"][k] for sp, k in zip(splits, keep, strict=True)])
+    writers = np.concatenate(
+        [sp["writer"][k].astype(str) for sp, k in zip(splits, keep, strict=True)]
+    )
+    names = sorted(set(writers))
+    rng = np.random.default_rng([seed, 11])
+    out: dict[str, list[Sample]] = {}
+    for word in words:
+        wanted = [char_to_label(c) for c in word if c != " "]
+        able = [w for w in names if all(((writers == w) & (labels == y)).any() for y in wanted)]
+        if len(able) < n:
+            raise UsageError(
+                f"pilot: only {len(able)} held-out writers wrote every letter of {word!r}; "
+                f"{n} are needed"
+            )
+        out[word] = []
+        for k, writer in enumerate(rng.choice(able, size=n, replace=False)):
+            letters = np.stack(
+                [traj[np.flatnonzero((writers == writer) & (labels == y))[0]] for y in wanted]
+            )
+            settings = replace(GenerateSettings(seed=k), delayed_strokes=delayed_strokes)
+            traj_word, _ = compose_word(letters, word, settings)
+            writer_id = f"pilot-{writer}"
+            path = Path(out_dir) / writer_id / f"{word}.json"
+            path.parent.mkdir(parents=True, exist_ok=True)
+            traj_word.to_json(path)
+            out[word].append(trajectory_sample(traj_word, writer_id, str(path)))
+    return out
+
+
 def stand_ins(
     robot: Sample, n: int, seed: int, amount: float = 0.08, delayed_strokes: bool = True
 ) -> list[Sample]:
@@ -751,6 +811,7 @@ def generate_robot_words(
     overrides: Sequence[str] = (),
     progress: Callable[[str], None] | None = None,
     delayed_strokes: bool = True,
+    hand_per_word: bool = True,
 ) -> dict[str, Path]:
     """Write each word with one :class:`prg.writer.Writer` (the model loaded once).
 
@@ -770,6 +831,10 @@ def generate_robot_words(
     delayed_strokes : bool
         Passed as ``prg-write``'s ``delayed_strokes``: True dots the i's and j's and crosses
         the t's and f's after the cursive word; False writes the paper's single stroke.
+    hand_per_word : bool
+        True (the study's ``robot.hands: per_word``): word ``i`` is written with
+        ``generate.seed`` + ``i``, each in its own hand, as each trial's human words are by
+        different people; False: every word with the one seed, in one hand.
 
     Returns
     -------
@@ -805,8 +870,11 @@ def generate_robot_words(
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = {}
+    base = writer.settings
     for i, word in enumerate(words):
         if progress:
             progress(f"robot writes {word!r} ({i + 1}/{len(words)})")
+        if hand_per_word:
+            writer.settings = replace(base, seed=base.seed + i)
         paths[word] = writer.write(text=word).word.to_json(out_dir / f"{word}.json")
     return paths
