@@ -23,20 +23,12 @@ from pathlib import Path
 
 import numpy as np
 
+from prg.evaluation.kinematics import MEASURES, TARGETS
+
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 WORDS = ("bell", "cat", "jump", "joy", "little", "letter", "water", "moon", "house", "people")
-MEASURES = ("beta", "r2", "speed_cv", "peaks_per_s", "sparc", "lognormal_snr_db")
 DT = 0.01
-TARGETS = {"beta": (0.2, 0.4), "speed_cv": (0.25, None), "lognormal_snr_db": (20.0, None)}
-
-
-def executed_tip(result) -> np.ndarray:
-    """The simulated pen tip along the word's body (the first commanded stroke), every DT s."""
-    body = result.step_stroke == 0
-    t, xy = result.t[body], result.tip_paper[body, :2]
-    grid = np.arange(t[0], t[-1], DT)
-    return np.column_stack([np.interp(grid, t, xy[:, 0]), np.interp(grid, t, xy[:, 1])])
 
 
 def summary(rows: list[dict]) -> dict:
@@ -51,43 +43,24 @@ def summary(rows: list[dict]) -> dict:
 
 
 def main() -> int:
-    from prg.data.lasa import load_demos
-    from prg.evaluation.kinematics import controls, kinematics
+    from prg.evaluation.kinematics import kinematics_rows
     from prg.files import write_json
     from prg.models.checkpoint import load_model
-    from prg.pipeline.compose import GenerateSettings
-    from prg.pipeline.timing import timed_body
-    from prg.sim import simulate_word
-    from prg.writer import Writer
 
     ckpt = ROOT / "models" / "muse" / "model.ckpt"
     if not ckpt.is_file():
         print(f"bench_kinematics: {ckpt.relative_to(ROOT)} is missing: run `make demo` first")
         return 2
     model, info = load_model(ckpt)
-    groups: dict[str, list[dict]] = {}
-    for timing in ("human", "constant"):
-        for i, text in enumerate(WORDS):
-            settings = GenerateSettings(seed=i, timing=timing)
-            result = Writer(model, settings, hands=info["hands"]).write(text=text)
-            samples, duration = timed_body(result.word.body, settings)
-            dt = duration / (len(samples) - 1)
-            groups.setdefault(f"{timing}: planned", []).append(kinematics(result.rollout, dt))
-            sim = simulate_word(result.word, "panda", render=False)
-            groups.setdefault(f"{timing}: executed", []).append(kinematics(executed_tip(sim), DT))
-            print(f"{timing} {text!r}: simulated", flush=True)
-    demos = load_demos()
-    groups["LASA (human)"] = [
-        kinematics(d.positions, float(np.diff(d.times).mean())) for d in demos
-    ]
-    first = demos[0]
-    for name, path in controls(first.positions, float(np.diff(first.times).mean())).items():
-        groups[f"control: {name}"] = [kinematics(path, float(np.diff(first.times).mean()))]
+    groups = kinematics_rows(
+        model, info["hands"], WORDS, progress=lambda line: print(line, flush=True)
+    )
+    n_lasa = len(groups["LASA (human)"])
     table = {name: summary(rows) for name, rows in groups.items()}
     lasa = table["LASA (human)"]
     print(
         f"\nPen kinematics, medians over {len(WORDS)} words (demo MUSE, Panda) and "
-        f"{len(demos)} LASA demonstrations; ratio: executed (human timing) over LASA"
+        f"{n_lasa} LASA demonstrations; ratio: executed (human timing) over LASA"
     )
     header = f"{'':>26}" + "".join(f"{m:>17}" for m in MEASURES)
     print(header)

@@ -44,6 +44,12 @@ def build_command(args: argparse.Namespace) -> int:
     from studies.design_config import load_study
 
     config = load_study(args.config, args.set or [])
+    pilot_data = args.pilot_data
+    if pilot_data is not None and not (Path(pilot_data) / "test.npz").is_file():
+        raise UsageError(
+            f"--pilot-data {pilot_data}: no test.npz there; give a folder prg-prepare made, "
+            f"e.g. {DEFAULT_PILOT_DATA}"
+        )
     out = check_output(args.out or default_out(config.name, args.pilot), "--out")
     report = build_study(
         config,
@@ -53,7 +59,7 @@ def build_command(args: argparse.Namespace) -> int:
         out_dir=out,
         progress=None if args.quiet else _say,
         pilot=args.pilot,
-        pilot_data=args.pilot_data,
+        pilot_data=pilot_data if pilot_data is not None else DEFAULT_PILOT_DATA,
     )
     for note in report.notes:
         _say(f"note: {note}")
@@ -138,9 +144,8 @@ def _add_build(subparsers) -> None:
     p.add_argument(
         "--pilot-data",
         metavar="DIR",
-        default=str(DEFAULT_PILOT_DATA),
-        help="prepared dataset whose test-split writers write a pilot's human words "
-        f"(default {DEFAULT_PILOT_DATA})",
+        help="prepared dataset whose held-out writers write a pilot's human words (default "
+        f"{DEFAULT_PILOT_DATA} when it exists, else stand-ins made from the robot's words)",
     )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=build_command)

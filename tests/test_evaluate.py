@@ -31,6 +31,7 @@ TINY = [
     "likelihood.k_conditional=6",
     "likelihood.n_test=12",
     "classifier.epochs=1",
+    "kinematics.words=[ab]",
     "progress=false",
 ]
 
@@ -69,6 +70,18 @@ def test_reports_tables_figures_and_mlflow(trained_root, small_dataset):
     result = evaluate(cfg)
     reports = trained_root / "reports"
     models = {f: load_model(trained_root / f"models/{f}/model.ckpt")[0] for f in FAMILIES}
+
+    # kinematics: the word planned and executed with both timings, LASA and the two controls
+    groups = [r["group"] for r in result.kinematics]
+    assert groups[:4] == [
+        "human: planned",
+        "human: executed",
+        "constant: planned",
+        "constant: executed",
+    ]
+    assert {"LASA (human)", "control: white noise", "control: constant speed"} <= set(groups)
+    assert "human: executed" in (reports / "kinematics.md").read_text()
+    assert "kinematics/human_executed_beta" in result.metrics
 
     # Table I: each family fills exactly the cells it supports, which are the paper's cells,
     # and its trajectory-target cells once more under its own std
@@ -300,11 +313,12 @@ SETTINGS_REFUSED = [
     (
         ["parts=[plots]"],
         "parts ['plots']: choose from ['classifiers', 'likelihood', 'coherence', 'likeness', "
-        "'styles']",
+        "'styles', 'kinematics']",
     ),
     (
         ["parts=[]"],
-        "parts []: choose from ['classifiers', 'likelihood', 'coherence', 'likeness', 'styles']",
+        "parts []: choose from ['classifiers', 'likelihood', 'coherence', 'likeness', 'styles', "
+        "'kinematics']",
     ),
     (
         ["likelihood.cells=[logp_X,logp_T]"],
@@ -336,7 +350,7 @@ def test_settings_of_the_shipped_config_and_of_the_library_alone():
     from prg.evaluation.settings import CoherenceSettings, EvaluationSettings, LikelihoodSettings
 
     settings = evaluation_settings(compose_config("evaluate", ["likelihood.cells=logp_T"]))
-    assert settings.parts == ("likelihood", "coherence", "likeness", "styles")
+    assert settings.parts == ("likelihood", "coherence", "likeness", "styles", "kinematics")
     assert not settings.classifiers_only
     assert settings.likelihood.requested == (["logp_T"], True)
     assert settings.coherence.temperatures == {"mean": 0.0, "sampled": 1.0}

@@ -30,6 +30,7 @@ from prg.recording import (
     wav_bytes,
     waveform_envelope,
 )
+from prg.sim.geometry import pen_down_samples
 from prg.writer import Perception, Writer
 
 TEXT = "ab cd"
@@ -110,7 +111,12 @@ def test_the_rollout_is_animated_on_the_word_time_grid(written):
     n = len(rollout)
     summary = recording_summary(path)
     assert summary["word/rollout/pen"]["time"] == n
-    assert summary["word/rollout/path"]["time"] == n - 1  # one segment per step
+    # one ink segment per step whose both ends are pen-down (none across the space's travel)
+    word = written["word"]
+    body = slice(0, word.body_end)
+    down = pen_down_samples(word.points[body], word.segment[body], word.segment_kinds, rollout)
+    assert not down.all()  # "ab cd": some samples travel over the space, pen up
+    assert summary["word/rollout/path"]["time"] == int((down[1:] & down[:-1]).sum())
     times = read_times(path, "word/rollout/pen", "time")
     grid = np.linspace(0, written["word"].duration_s, n)
     np.testing.assert_allclose(times, grid, atol=NANOSECOND)

@@ -89,3 +89,28 @@ def test_a_pilots_human_words_are_held_out_writers_letters_joined(small_dataset,
             assert Path(s.origin).is_file() and s.writer_id.startswith("pilot-")
     with pytest.raises(UsageError, match="held-out writers wrote every letter"):
         held_out_words(["ab"], 99, data, tmp_path / "pilot")
+
+
+def test_the_judge_goes_into_the_study_report(tmp_path):
+    humans = human_dir(tmp_path / "human", WORDS, 5, seed=2)
+    folder = _build(tmp_path / "study", robot_dir(tmp_path / "robot", WORDS), humans, writers=5)
+    result = judge(folder, trials_per_word=20)
+    responses = tmp_path / "sim.csv"
+    study = str(REPO / "conf/study/turing.yaml")
+    args = ["simulate", "turing", "--participants", "8", "--true-rate", "0.3"]
+    assert main([*args, "--study", study, "--out", str(responses)]) == 0
+    out = tmp_path / "report"
+    analyze = ["analyze", str(responses), "--study", study, "--out", str(out), "--no-mixed"]
+    assert main([*analyze, "--no-paper", "--judge", str(folder / "judge.json")]) == 0
+    text = (out / "report.md").read_text()
+    assert "the automatic judge" in text and f"{result['observer']['pick_rate']:.2f}" in text
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["judge"]["observer_pick_rate"] == pytest.approx(result["observer"]["pick_rate"])
+    (tmp_path / "bad.json").write_text("{}")
+    assert main([*analyze, "--judge", str(tmp_path / "bad.json")]) == 2
+
+
+def test_a_pilot_data_folder_without_a_dataset_is_one_clear_error(tmp_path, capsys):
+    args = ["build", str(REPO / "conf/study/turing.yaml"), "--pilot", "--out", str(tmp_path / "p")]
+    assert main([*args, "--pilot-data", str(tmp_path), "-q"]) == 2
+    assert "--pilot-data" in capsys.readouterr().err and not (tmp_path / "p").exists()

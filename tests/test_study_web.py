@@ -695,8 +695,9 @@ def test_without_human_samples_the_build_says_what_is_missing(page, tmp_path, sa
 
 
 def test_a_pilot_build_runs_with_stand_ins_and_is_marked_pilot_everywhere(
-    page, tmp_path, samples, capsys
+    page, tmp_path, samples, capsys, monkeypatch
 ):
+    monkeypatch.chdir(tmp_path)  # no prepared dataset here: the robot's words make the stand-ins
     posted = []
     page.route(COLLECT, lambda route: (posted.append(route.request), route.fulfill(body="ok")))
     out = tmp_path / "pilot"

@@ -153,6 +153,11 @@ def _add_analyze(subparsers: argparse._SubParsersAction) -> None:
         "study (default: <responses name>.truth.json beside them, as prg-study simulate "
         "writes it)",
     )
+    a.add_argument(
+        "--judge",
+        metavar="JSON",
+        help="a built study's judge.json (prg-study judge) to report beside the analysis",
+    )
     a.add_argument("--no-mixed", action="store_true", help="skip the crossed mixed logit (faster)")
     a.add_argument("--no-paper", action="store_true", help="leave out the paper-reproduction table")
 
@@ -295,12 +300,13 @@ def run_analyze(args: argparse.Namespace) -> int:
     out = check_out_dir(args.out or Path("reports") / "study" / Path(args.responses).stem)
     check_output(out, "--out")
     truths = [(read_truth(path), path) for path in args.truth or []]  # bad files fail first
+    judge = read_judge(args.judge) if args.judge else None
     analysis = analyze_file(args.responses, cfg)
     beside = truth_path_for(args.responses)
     if not truths and analysis.origin == "simulated" and beside.is_file():
         truths = [(read_truth(beside, "the truth file"), str(beside))]
     analysis = with_truth(analysis, truths)
-    write_report(analysis, out, paper=not args.no_paper)
+    write_report(analysis, out, paper=not args.no_paper, judge=judge)
     if analysis.origin != "study":
         known = [f"; {st.kind} truth: {st.truth_path}" for st in analysis.studies if st.truth]
         print(f"data: {analysis.origin.upper()} (the report says so first{''.join(known)})")
@@ -311,6 +317,16 @@ def run_analyze(args: argparse.Namespace) -> int:
             print(f"{st.kind}: warning: {w}")
     print(f"report: {out / 'report.html'}")
     return 0
+
+
+def read_judge(path: str) -> dict:
+    """A ``judge.json`` written by ``prg-study judge``, or one line naming the file."""
+    from prg.files import read_json
+
+    doc = read_json(path, "--judge file")
+    if not isinstance(doc, dict) or not {"observer", "c2st", "words"} <= set(doc):
+        raise UsageError(f"--judge {path}: not a judge.json written by prg-study judge")
+    return doc
 
 
 def _print_table(frame, columns: list[str]) -> None:

@@ -789,8 +789,42 @@ def check_out_dir(out: str | Path) -> Path:
     return out
 
 
-def write_report(analysis: Analysis, out: str | Path, *, paper: bool = True) -> Path:
+def judge_section(doc: Doc, judge: dict) -> None:
+    """What the automatic judge (``prg-study judge``, :mod:`studies.judge`) said of the study's
+    stimuli before any participant saw them."""
+    doc.h(2, "Before the participants: the automatic judge")
+    obs = judge["observer"]
+    doc.p(
+        f"`prg-study judge` on `{judge['folder']}`: {judge['words']} words, "
+        f"{judge['robot_samples']} robot and {judge['human_samples']} human samples. A linear "
+        "classifier trained leaving one word out tells the robot's words from the people's "
+        "(balanced accuracy, 0.5: indistinguishable); a simulated observer picks the robot among "
+        f"{judge['n_options']} (chance {judge['chance']:.2f}, the paper's participants "
+        f"{judge['paper_participants']:.2f})."
+    )
+    rows = [
+        {
+            "measure": f"C2ST, {name}",
+            "value": f"{c['balanced_accuracy']:.2f}",
+            "95 % CI": f"{c['ci95'][0]:.2f}-{c['ci95'][1]:.2f}",
+        }
+        for name, c in judge["c2st"].items()
+    ]
+    rows.append(
+        {
+            "measure": "simulated observer's pick rate",
+            "value": f"{obs['pick_rate']:.2f}",
+            "95 % CI": f"{obs['ci95'][0]:.2f}-{obs['ci95'][1]:.2f}",
+        }
+    )
+    doc.table(pd.DataFrame(rows), "The judge's scores (95 % intervals by bootstrapping the words).")
+
+
+def write_report(
+    analysis: Analysis, out: str | Path, *, paper: bool = True, judge: dict | None = None
+) -> Path:
     """Write the report folder atomically (see the module docstring); returns ``out``.
+    ``judge``: a ``judge.json`` (:func:`studies.judge.judge`) to report beside the analysis.
 
     Raises
     ------
@@ -803,6 +837,8 @@ def write_report(analysis: Analysis, out: str | Path, *, paper: bool = True) -> 
 
     reproduced = reproduce_paper() if paper else None
     doc = build_report(analysis, reproduced)
+    if judge is not None:
+        judge_section(doc, judge)
     with staged_folder(out) as tmp:
         (tmp / "figures").mkdir()
         for b in doc.blocks:
@@ -852,6 +888,12 @@ def write_report(analysis: Analysis, out: str | Path, *, paper: bool = True) -> 
             "studies": {st.kind: _jsonable(st.verdict) for st in analysis.studies},
             "warnings": [w for st in analysis.studies for w in st.warnings],
         }
+        if judge is not None:
+            metrics["judge"] = {
+                "observer_pick_rate": judge["observer"]["pick_rate"],
+                "observer_ci95": judge["observer"]["ci95"],
+                "c2st": {k: v["balanced_accuracy"] for k, v in judge["c2st"].items()},
+            }
         (tmp / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n", encoding="utf-8")
     return out
 

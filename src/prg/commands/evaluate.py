@@ -42,6 +42,7 @@ from prg.evaluation.settings import (
     ClassifierSettings,
     CoherenceSettings,
     EvaluationSettings,
+    KinematicsSettings,
     LikelihoodSettings,
     LikenessSettings,
     StyleSettings,
@@ -73,6 +74,7 @@ def evaluation_settings(cfg: DictConfig) -> EvaluationSettings:
         classifier=build(ClassifierSettings, classifier, "classifier"),
         likeness=build(LikenessSettings, node(cfg, "likeness"), "likeness"),
         styles=build(StyleSettings, node(cfg, "styles"), "styles"),
+        kinematics=build(KinematicsSettings, node(cfg, "kinematics"), "kinematics"),
     )
 
 

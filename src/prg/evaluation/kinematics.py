@@ -142,3 +142,67 @@ def controls(xy: np.ndarray, dt: float, seed: int = 0) -> dict[str, np.ndarray]:
     s = np.linspace(0.0, arc[-1], len(xy))
     constant = np.column_stack([np.interp(s, arc, xy[:, 0]), np.interp(s, arc, xy[:, 1])])
     return {"white noise": noise, "constant speed": constant}
+
+
+#: The measures of each row of the kinematics report.
+MEASURES = ("beta", "r2", "speed_cv", "peaks_per_s", "sparc", "lognormal_snr_db")
+
+#: Targets on the executed pen tip with the human timing (medians over the words).
+TARGETS = {"beta": (0.2, 0.4), "speed_cv": (0.25, None), "lognormal_snr_db": (20.0, None)}
+
+
+def executed_tip(result, dt: float = 0.01) -> np.ndarray:
+    """The simulated pen tip along a word's body (its first commanded stroke), every ``dt``
+    seconds, from a :class:`prg.sim.SimResult`."""
+    body = result.step_stroke == 0
+    t, xy = result.t[body], result.tip_paper[body, :2]
+    grid = np.arange(t[0], t[-1], dt)
+    return np.column_stack([np.interp(grid, t, xy[:, 0]), np.interp(grid, t, xy[:, 1])])
+
+
+def kinematics_rows(
+    model, hands, words, robot: str = "panda", lasa: bool = True, progress=None
+) -> dict[str, list[dict[str, float]]]:
+    """Per group, the measures of every path: each word written (seed ``i``) with the human
+    timing and the paper's constant speed, as planned (the DMP's rollout) and as the simulated
+    ``robot`` executes it; the LASA demonstrations (``lasa``) and the two controls."""
+    from prg.pipeline.compose import GenerateSettings
+    from prg.pipeline.timing import timed_body
+    from prg.sim import simulate_word
+    from prg.writer import Writer
+
+    groups: dict[str, list[dict[str, float]]] = {}
+    for timing in ("human", "constant"):
+        for i, text in enumerate(words):
+            settings = GenerateSettings(seed=i, timing=timing)
+            result = Writer(model, settings, hands=hands).write(text=text)
+            samples, duration = timed_body(result.word.body, settings)
+            dt = duration / (len(samples) - 1)
+            groups.setdefault(f"{timing}: planned", []).append(kinematics(result.rollout, dt))
+            sim = simulate_word(result.word, robot, render=False)
+            groups.setdefault(f"{timing}: executed", []).append(kinematics(executed_tip(sim), 0.01))
+            if progress:
+                progress(f"{timing} {text!r}")
+    if lasa:
+        from prg.data.lasa import load_demos
+
+        demos = load_demos()
+        groups["LASA (human)"] = [
+            kinematics(d.positions, float(np.diff(d.times).mean())) for d in demos
+        ]
+        step = float(np.diff(demos[0].times).mean())
+        for name, path in controls(demos[0].positions, step).items():
+            groups[f"control: {name}"] = [kinematics(path, step)]
+    return groups
+
+
+def medians(groups: dict[str, list[dict[str, float]]]) -> list[dict]:
+    """One row per group: ``group``, ``paths`` and the median of each measure."""
+    return [
+        {
+            "group": name,
+            "paths": len(rows),
+            **{m: float(np.median([r[m] for r in rows])) for m in MEASURES},
+        }
+        for name, rows in groups.items()
+    ]

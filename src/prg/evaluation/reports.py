@@ -407,6 +407,11 @@ def report_texts(
             [{**r, "row": f"{r['family']} {r['mode']}"} for r in result.likeness],
             ["row", *LIKENESS_MEASURES],
         )
+    if "kinematics" in settings.parts:
+        from prg.evaluation.kinematics import MEASURES
+
+        texts["kinematics.csv"] = to_csv(result.kinematics, ["group", "paths", *MEASURES])
+        texts["kinematics.md"] = kinematics_markdown(result.kinematics, settings)
     if "styles" in settings.parts:
         texts["styles.csv"] = to_csv(result.styles, STYLE_COLUMNS)
         texts["styles.md"] = styles_markdown(result.styles, settings)
@@ -450,6 +455,38 @@ def likeness_markdown(rows: list[dict], settings: EvaluationSettings) -> str:
             f"{settings.seed}.",
             "",
             _md_table(["family", "mode", *LIKENESS_MEASURES], body),
+            "",
+        ]
+    )
+
+
+def kinematics_markdown(rows: list[dict], settings: EvaluationSettings) -> str:
+    """The kinematics table: the robot's words, planned and executed, beside human motion."""
+    from prg.evaluation.kinematics import MEASURES, TARGETS
+
+    k = settings.kinematics
+    head = "# Kinematics: how the pen moves, against human motion"
+    if not rows:
+        return f"{head}\n\nNot computed: no {k.family} checkpoint with hands was evaluated.\n"
+    body = [[r["group"], str(r["paths"]), *(f"{r[m]:.3f}" for m in MEASURES)] for r in rows]
+    targets = "; ".join(
+        f"{m} {'>= ' + str(lo) if hi is None else f'in [{lo}, {hi}]'}"
+        for m, (lo, hi) in TARGETS.items()
+    )
+    return "\n".join(
+        [
+            head,
+            "",
+            f"The {k.family} model writes {', '.join(k.words)} (seed i for the i-th word) with the "
+            "human timing (the default) and with the paper's constant speed; each is measured as "
+            f"planned (the DMP's rollout) and as the simulated {k.robot} executes it (its pen tip "
+            "along the word's body), beside the LASA human handwriting demonstrations and the "
+            "estimator's controls (white noise, a constant-speed path). Medians over the paths: "
+            "the speed-curvature power law's beta and R^2, the speed's coefficient of variation, "
+            "speed peaks per second, SPARC (closer to 0 is smoother) and the SNR of a sigma-"
+            f"lognormal fit (dB). Targets on the executed pen tip, human timing: {targets}.",
+            "",
+            _md_table(["group", "paths", *MEASURES], body),
             "",
         ]
     )

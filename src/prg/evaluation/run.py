@@ -94,6 +94,7 @@ class Evaluation:
     shifted_images: list[dict] = field(default_factory=list)
     classifiers: dict[str, dict] = field(default_factory=dict)
     likeness: list[dict] = field(default_factory=list)
+    kinematics: list[dict] = field(default_factory=list)
     styles: list[dict] = field(default_factory=list)
     metrics: dict[str, Any] = field(default_factory=dict)
     report_dir: Path | None = None
@@ -418,6 +419,11 @@ def metrics_of(result: Evaluation) -> dict[str, Any]:
         mode = likeness_key(row["mode"])
         for measure in LIKENESS_MEASURES:
             metrics[f"{row['family']}/likeness_{mode}_{measure}"] = round(row[measure], 4)
+    for row in result.kinematics:
+        group = row["group"].replace(": ", "_").replace(" ", "_").replace("(", "").replace(")", "")
+        for measure in ("beta", "speed_cv", "lognormal_snr_db", "sparc", "peaks_per_s"):
+            if _finite(row[measure]):
+                metrics[f"kinematics/{group}_{measure}"] = round(row[measure], 4)
     for row in style_summary(result.styles):
         for key in ("generated", "ratio"):
             metrics[f"{row['family']}/style_k{row['k']}_{key}"] = round(row[key], 4)
@@ -458,6 +464,26 @@ def likeness_part(models: Models, data_dir: Path, classifier, settings: Evaluati
         settings.seed,
         progress=(lambda what: log.info("likeness: %s", what)) if settings.progress else None,
     )
+
+
+def kinematics_part(models: Models, settings: EvaluationSettings) -> list[dict]:
+    """The kinematics report's rows (:func:`prg.evaluation.kinematics.kinematics_rows`): the
+    configured family's words, planned and executed, beside LASA and the controls."""
+    from prg.evaluation.kinematics import kinematics_rows, medians
+
+    k = settings.kinematics
+    loaded = models.get(k.family)
+    if loaded is None or loaded.info.get("hands") is None:
+        log.warning("kinematics not computed: no %s checkpoint with hands evaluated", k.family)
+        return []
+    groups = kinematics_rows(
+        loaded.model,
+        loaded.info["hands"],
+        k.words,
+        robot=k.robot,
+        progress=(lambda line: log.info("kinematics: %s", line)) if settings.progress else None,
+    )
+    return medians(groups)
 
 
 def styles_part(models: Models, data_dir: Path, settings: EvaluationSettings) -> list[dict]:
@@ -520,5 +546,7 @@ def run_evaluation(
         result.likeness = likeness_part(models, data_dir, classifiers[TRAJ], settings)
     if "styles" in settings.parts:
         result.styles = styles_part(models, data_dir, settings)
+    if "kinematics" in settings.parts:
+        result.kinematics = kinematics_part(models, settings)
     result.metrics = metrics_of(result)
     return result

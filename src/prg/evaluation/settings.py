@@ -27,7 +27,7 @@ from prg.evaluation.classifiers import DEFAULT_CFG
 from prg.evaluation.likelihood import PAPER_TRAJ_STD, TABLE1_CELLS
 from prg.fields import check_ranges
 
-PARTS = ("classifiers", "likelihood", "coherence", "likeness", "styles")
+PARTS = ("classifiers", "likelihood", "coherence", "likeness", "styles", "kinematics")
 IMPUTED = "imputed"
 """The generation kind of samples decoded after imputing the missing modalities (MUSE)."""
 
@@ -159,6 +159,26 @@ class StyleSettings:
 
 
 @dataclass(frozen=True)
+class KinematicsSettings:
+    """How the pen's motion is measured (``kinematics``; :mod:`prg.evaluation.kinematics`).
+
+    family : the model that writes the words (its checkpoint among the evaluated ones).
+    words : written with the human timing and the paper's constant speed, planned and executed.
+    robot : the simulated arm that executes them.
+    """
+
+    family: str = "muse"
+    words: tuple[str, ...] = ("bell", "cat", "jump", "joy", "little", "letter")
+    robot: str = "panda"
+
+    def __post_init__(self) -> None:
+        words = tuple(self.words)
+        if not words or any(not isinstance(w, str) or not w.isalnum() for w in words):
+            raise SettingsError("words", f"{list(words)}: give a list of words of 0-9, A-Z, a-z")
+        object.__setattr__(self, "words", words)
+
+
+@dataclass(frozen=True)
 class ClassifierSettings:
     """How the coherence classifiers are trained (``classifier``, without its ``dir``;
     :func:`prg.evaluation.classifiers.ensure_classifiers`)."""
@@ -192,6 +212,7 @@ class EvaluationSettings:
     classifier: ClassifierSettings = field(default_factory=ClassifierSettings)
     likeness: LikenessSettings = field(default_factory=LikenessSettings)
     styles: StyleSettings = field(default_factory=StyleSettings)
+    kinematics: KinematicsSettings = field(default_factory=KinematicsSettings)
 
     def __post_init__(self) -> None:
         parts = list(self.parts)
