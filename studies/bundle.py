@@ -513,6 +513,11 @@ def _build_into(
             "stimuli": len(samples),
             "human_writers": {w: writers[w] for w in config.words},
             "render": vars(style),
+            "robot": {  # how the robot's words were written (prg-study judge writes more)
+                **config.robot,
+                "ckpt": str(Path(ckpt).resolve()) if ckpt is not None else config.robot["ckpt"],
+                "dir": str(robot_dir) if robot_dir is not None else None,
+            },
             "columns": list(response_columns(config.kind)),
         },
     )

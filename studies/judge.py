@@ -42,12 +42,13 @@ ROBOT = "robot"
 
 @dataclass(frozen=True)
 class Stimulus:
-    """One word of a built study: its writer, its strokes and its rendered image."""
+    """One word of a built study: its writer, its strokes and its rendered image (a file, or
+    an image drawn for the judge)."""
 
     word: str
     writer_id: str
     strokes: tuple[np.ndarray, ...]
-    image: Path
+    image: Path | object
 
 
 def read_stimuli(folder: str | os.PathLike) -> list[Stimulus]:
@@ -105,13 +106,60 @@ def trajectory_features(strokes: tuple[np.ndarray, ...]) -> np.ndarray:
     return np.concatenate([np.interp(s, arc, path[:, 0]), np.interp(s, arc, path[:, 1])])
 
 
-def image_features(path: Path) -> np.ndarray:
-    """The stimulus image, grey, :data:`IMAGE_SHAPE`, ink 1 and paper 0, flattened."""
+def image_features(image) -> np.ndarray:
+    """The stimulus image (a PNG file or a PIL image), grey, :data:`IMAGE_SHAPE`, ink 1 and
+    paper 0, flattened."""
     from PIL import Image
 
-    with Image.open(path) as im:
-        grey = im.convert("L").resize(IMAGE_SHAPE[::-1], Image.Resampling.BOX)
+    im = Image.open(image) if isinstance(image, str | os.PathLike) else image
+    grey = im.convert("L").resize(IMAGE_SHAPE[::-1], Image.Resampling.BOX)
     return 1.0 - np.asarray(grey, dtype=np.float64).ravel() / 255.0
+
+
+def more_robot_words(folder: str | os.PathLike, per_word: int) -> list[Stimulus]:
+    """``per_word`` more robot samples of each study word, written as the study's robot wrote
+    (``manifest.json``'s ``robot``: family, checkpoint, overrides, one hand per word; a study
+    whose robot words were given as files, ``robot.dir``, is refused) in other hands (``generate.seed`` moved on by the number of words each time) and
+    drawn in the study's style: the study shows one robot word a word, which leaves the judge
+    little to learn from."""
+    import tempfile
+
+    from prg.files import read_json
+    from studies.stimuli import RenderStyle, generate_robot_words, load_robot_words, render_sample
+
+    manifest = read_json(Path(folder) / "manifest.json", "the study's manifest.json")
+    robot = manifest.get("robot")  # the robot settings the study was built with
+    words = manifest.get("words")
+    if not isinstance(robot, dict) or not isinstance(words, list) or not words:
+        raise UsageError(
+            f"{folder}: its manifest.json does not say how its robot wrote (built before the "
+            "judge could write more robot words): rebuild the study"
+        )
+    if robot.get("dir"):
+        raise UsageError(
+            f"{folder}: its robot words were given as files ({robot['dir']}): the judge cannot "
+            "write more of them; judge without --robot-words"
+        )
+    style = RenderStyle.from_dict(manifest["render"])
+    delayed = bool(manifest.get("delayed_strokes", True))
+    out = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for k in range(1, per_word + 1):
+            where = Path(tmp) / str(k)
+            seed = f"generate.seed={k * len(words)}"
+            generate_robot_words(
+                words,
+                where,
+                family=robot["family"],
+                ckpt=robot.get("ckpt"),
+                overrides=[*robot["write_overrides"], seed],
+                delayed_strokes=delayed,
+                hand_per_word=robot.get("hands", "per_word") == "per_word",
+            )
+            for word, sample in load_robot_words(where, words, delayed).items():
+                image = render_sample(sample, style)
+                out.append(Stimulus(word, ROBOT, sample.strokes, image))
+    return out
 
 
 def word_centred(x: np.ndarray, words: np.ndarray) -> np.ndarray:
@@ -162,7 +210,7 @@ def _observer(scores, is_robot, words, n_humans, trials, rng) -> dict[str, float
         hits = 0
         for _ in range(trials):
             shown = rng.choice(humans, size=n_humans, replace=False)
-            hits += scores[robots[0]] > scores[shown].max()
+            hits += scores[rng.choice(robots)] > scores[shown].max()
         rates[str(word)] = hits / trials
     return rates
 
@@ -173,12 +221,21 @@ def _bootstrap(values_by_word: dict[str, float], rng, n: int = 2000) -> tuple[fl
     return float(np.percentile(means, 2.5)), float(np.percentile(means, 97.5))
 
 
-def judge(folder: str | os.PathLike, n_options: int = 5, trials_per_word: int = 200, seed: int = 0):
+def judge(
+    folder: str | os.PathLike,
+    n_options: int = 5,
+    trials_per_word: int = 200,
+    seed: int = 0,
+    robot_per_word: int = 0,
+):
     """Score a built study's stimuli (module docstring); returns the result as a dict and
-    writes it to ``<folder>/judge.json``."""
+    writes it to ``<folder>/judge.json``. ``robot_per_word`` > 0 adds that many robot words a
+    word (:func:`more_robot_words`) to the study's one."""
     from prg.files import write_json
 
     stimuli = read_stimuli(folder)
+    if robot_per_word:
+        stimuli += more_robot_words(folder, robot_per_word)
     words = np.array([s.word for s in stimuli])
     is_robot = np.array([s.writer_id == ROBOT for s in stimuli])
     if not is_robot.any():
@@ -199,6 +256,7 @@ def judge(folder: str | os.PathLike, n_options: int = 5, trials_per_word: int = 
         "robot_samples": int(is_robot.sum()),
         "human_samples": int((~is_robot).sum()),
         "n_options": n_options,
+        "robot_per_word": 1 + robot_per_word,
         "chance": 1.0 / n_options,
         "paper_participants": 0.42,
         "c2st": {},

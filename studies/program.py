@@ -157,7 +157,11 @@ def judge_command(args: argparse.Namespace) -> int:
 
     if args.options < 2:
         raise UsageError(f"--options {args.options}: give 2 or more (the robot and the humans)")
-    result = judge(args.folder, n_options=args.options, seed=args.seed)
+    if args.robot_words < 0:
+        raise UsageError(f"--robot-words {args.robot_words}: give 0 or more")
+    result = judge(
+        args.folder, n_options=args.options, seed=args.seed, robot_per_word=args.robot_words
+    )
     for line in summary_lines(result):
         _say(line)
     _say(f"wrote {Path(args.folder) / 'judge.json'}")
@@ -178,6 +182,14 @@ def _add_judge(subparsers) -> None:
     p.add_argument("folder", help="a built study, e.g. studies/turing/pilot")
     p.add_argument("--options", type=int, default=5, help="samples per trial (default 5)")
     p.add_argument("--seed", type=int, default=0, help="seed of the simulated trials")
+    p.add_argument(
+        "--robot-words",
+        type=int,
+        default=0,
+        metavar="N",
+        help="write N more robot words a word, in other hands, as the study's robot writes "
+        "(the study shows one; more give the judge something to learn from)",
+    )
     p.set_defaults(func=judge_command)
 
 

@@ -114,3 +114,19 @@ def test_a_pilot_data_folder_without_a_dataset_is_one_clear_error(tmp_path, caps
     args = ["build", str(REPO / "conf/study/turing.yaml"), "--pilot", "--out", str(tmp_path / "p")]
     assert main([*args, "--pilot-data", str(tmp_path), "-q"]) == 2
     assert "--pilot-data" in capsys.readouterr().err and not (tmp_path / "p").exists()
+
+
+def test_more_robot_words_are_written_as_the_studys_robot_writes(
+    tmp_path, untrained_muse_checkpoint
+):
+    humans = human_dir(tmp_path / "human", WORDS, 4, seed=3)
+    args = ["build", str(REPO / "conf/study/turing.yaml"), "--out", str(tmp_path / "s"), "-q"]
+    args += ["--ckpt", str(untrained_muse_checkpoint), "--human", str(humans)]
+    for s in (f"words=[{', '.join(WORDS)}]", "human_writers=4", "foils=3"):
+        args += ["--set", s]
+    assert main(args) == 0
+    result = judge(tmp_path / "s", n_options=4, trials_per_word=20, robot_per_word=2)
+    assert result["robot_samples"] == 3 * len(WORDS) and result["robot_per_word"] == 3
+    given = _build(tmp_path / "given", robot_dir(tmp_path / "robot", WORDS), humans)
+    with pytest.raises(UsageError, match="given as files"):
+        judge(given, robot_per_word=1)
