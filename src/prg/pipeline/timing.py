@@ -37,6 +37,25 @@ MIN_STROKE_S = 0.2
 MAX_DMP_SAMPLES = 20_000  # 200 s of writing at 100 samples/s: about 1 GB and 25 s to fit
 
 
+def _cumulative_length(points: np.ndarray) -> np.ndarray:
+    """Arc length at each point of a path (P, 2), from 0."""
+    steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    return np.concatenate([[0.0], np.cumsum(steps)])
+
+
+def _arc(points: np.ndarray) -> np.ndarray:
+    """:func:`_cumulative_length` of a word's path; one error when it has no length."""
+    arc = _cumulative_length(points)
+    if arc[-1] <= 0:
+        raise UsageError("the word trajectory has zero length: nothing to write")
+    return arc
+
+
+def _along(points: np.ndarray, arc: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """The points of a path (P, 2) at arc lengths ``s``, linearly between its points."""
+    return np.column_stack([np.interp(s, arc, points[:, 0]), np.interp(s, arc, points[:, 1])])
+
+
 def rest_to_rest_samples(
     points: np.ndarray, speed_cm_s: float, ramp_s: float, samples_per_s: float
 ) -> tuple[np.ndarray, float]:
@@ -59,11 +78,8 @@ def rest_to_rest_samples(
     duration : float
         Seconds.
     """
-    steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
-    arc = np.concatenate([[0.0], np.cumsum(steps)])
+    arc = _arc(points)
     length = arc[-1]
-    if length <= 0:
-        raise UsageError("the word trajectory has zero length: nothing to write")
     # a profile of plateau speed v with ramps r: length = v (T - r), mean speed = length / T
     duration = length / speed_cm_s
     ramp = min(ramp_s, duration / 2)
@@ -72,9 +88,7 @@ def rest_to_rest_samples(
     t = np.linspace(0.0, duration, n)
     s = plateau * _ramped_distance(t, duration, ramp)
     s = np.clip(s * length / s[-1], 0.0, length)
-    x = np.interp(s, arc, points[:, 0])
-    y = np.interp(s, arc, points[:, 1])
-    return np.stack([x, y], axis=1), duration
+    return _along(points, arc, s), duration
 
 
 #: The speed-curvature power law's exponent of human drawing and cursive writing (Lacquaniti,
@@ -166,11 +180,8 @@ def human_samples(
         Seconds: ``length / speed_cm_s``.
     """
     points = np.asarray(points, dtype=np.float64)
-    steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
-    arc = np.concatenate([[0.0], np.cumsum(steps)])
+    arc = _arc(points)
     length = arc[-1]
-    if length <= 0:
-        raise UsageError("the word trajectory has zero length: nothing to write")
     duration = length / speed_cm_s
     n = _sample_count(length, speed_cm_s, samples_per_s)
     ds = 0.005  # cm: the path resampled finely, equal steps
@@ -186,7 +197,7 @@ def human_samples(
         factor = np.exp(variation * g * math.sqrt(2.0 * math.sqrt(math.pi) * sigma))
     # the path's own curvature at 0.2 mm: a cusp (the foot of an h, where the pen turns back)
     # must slow the pen, though the movement-scale curvature below smears it out
-    fine_xy = np.column_stack([np.interp(s, arc, points[:, 0]), np.interp(s, arc, points[:, 1])])
+    fine_xy = _along(points, arc, s)
     heading = np.unwrap(np.arctan2(*np.gradient(fine_xy, axis=0)[:, ::-1].T))
     cusp = np.abs(gaussian_filter1d(np.gradient(heading, ds), 0.02 / ds, mode="nearest"))
     own = s / speed_cm_s  # the hand's own clock along the path, first at constant speed
@@ -196,7 +207,7 @@ def human_samples(
         # the decoded points
         grid = np.arange(0.0, own[-1], CURVATURE_DT)
         at = np.interp(grid, own, s)
-        xy = np.column_stack([np.interp(at, arc, points[:, 0]), np.interp(at, arc, points[:, 1])])
+        xy = _along(points, arc, at)
         _, kappa = speed_and_curvature(xy, CURVATURE_DT)
         kappa = np.interp(s, at, kappa)
         kappa = np.where(cusp > CUSP_KAPPA, np.maximum(kappa, cusp), kappa)
@@ -212,9 +223,7 @@ def human_samples(
     ramp = min(ramp_s, duration / 2)
     clock = _ramped_distance(np.linspace(0.0, duration, n), duration, ramp)
     s_at = np.interp(clock * own[-1] / clock[-1], own, s)
-    return np.column_stack(
-        [np.interp(s_at, arc, points[:, 0]), np.interp(s_at, arc, points[:, 1])]
-    ), duration
+    return _along(points, arc, s_at), duration
 
 
 def _clock(speed: np.ndarray, ds: float, duration: float) -> np.ndarray:
@@ -301,11 +310,10 @@ def stroke_samples(points: np.ndarray, duration: float, dt: float) -> np.ndarray
     """``points`` (m, 2) followed from rest to rest in ``duration`` seconds under the
     minimum-jerk profile, one sample every ``dt`` seconds or a little less (both ends included),
     shape (n >= 2, 2)."""
-    steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
-    arc = np.concatenate([[0.0], np.cumsum(steps)])
+    arc = _cumulative_length(points)
     n = max(2, int(np.ceil(duration / dt)) + 1)
     s = min_jerk(n) * arc[-1]
-    return np.column_stack([np.interp(s, arc, points[:, 0]), np.interp(s, arc, points[:, 1])])
+    return _along(points, arc, s)
 
 
 def delayed_samples(
