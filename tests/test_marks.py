@@ -92,11 +92,7 @@ def test_the_check_fails_when_a_mark_is_missing_or_misplaced(dataset_letters):
     assert "'i' (letter 2) has no dot above its stem" in check_marks(aside)
     above = moved(bar, [0.0, t_points[:, 1].max() + 0.2 - word.points[bar, 1].min()])
     assert "'t' (letter 1) has no bar across its stem" in check_marks(above)
-    single = compose_word(
-        np.stack([p / np.abs(p).max() for _, p in word.letters]),
-        "tie",
-        GenerateSettings(delayed_strokes=False),
-    )[0]
+    single = _writer(dataset_letters, GenerateSettings(delayed_strokes=False))("tie")
     assert check_marks(single) == [
         "'t' (letter 1) has no bar across its stem",
         "'i' (letter 2) has no dot above its stem",
@@ -220,3 +216,49 @@ def test_a_words_dmp_starts_and_ends_at_rest(dataset_letters):
     step = word.dmp.tau / (len(rollout) - 1)
     speeds = np.linalg.norm(np.diff(rollout, axis=0), axis=1) / step
     assert speeds[0] < 0.01 * np.median(speeds) and speeds[-1] < 0.01 * np.median(speeds)
+
+
+def _t_with_return():
+    """A one-stroke t: down the stem, round the foot, back up the right and across to the left."""
+    stem = np.column_stack([np.zeros(20), np.linspace(1.5, 0.1, 20)])
+    angle = np.linspace(np.pi, 2 * np.pi, 12)[1:]
+    foot = np.column_stack([0.2 + 0.2 * np.cos(angle), 0.2 + 0.2 * np.sin(angle)])
+    up = np.column_stack([np.full(10, 0.4), np.linspace(0.3, 1.0, 10)])
+    across = np.column_stack([np.linspace(0.3, -0.3, 10), np.full(10, 1.0)])
+    return np.vstack([stem, foot, up, across])
+
+
+def test_a_crossed_letter_ends_at_its_foot_when_its_path_returns_for_the_bar():
+    from prg.pipeline.marks import EXIT_RISE, crossed_exit
+
+    t = _t_with_return()
+    cut = crossed_exit(t)
+    assert len(cut) < len(t) and np.array_equal(cut, t[: len(cut)])  # a prefix
+    height = np.ptp(t[:, 1])
+    rise = cut[-1, 1] - t[:, 1].min()
+    assert EXIT_RISE * height < rise <= EXIT_RISE * height + 0.1  # just past the rise
+    assert cut[-1, 0] > 0.3  # left on the right of the stem, not back across it
+
+
+def test_a_crossed_letter_that_leaves_to_the_right_or_ends_at_its_foot_is_kept_whole():
+    from prg.pipeline.marks import crossed_exit
+
+    t = _t_with_return()
+    leaves_right = np.vstack(
+        [t[:35], np.column_stack([np.linspace(0.4, 1.2, 10), np.linspace(0.4, 0.8, 10)])]
+    )
+    assert np.array_equal(crossed_exit(leaves_right), leaves_right)
+    ends_at_foot = t[:25]
+    assert np.array_equal(crossed_exit(ends_at_foot), ends_at_foot)
+
+
+def test_words_with_a_returning_t_leave_it_from_its_foot_only_with_delayed_strokes():
+    t = _t_with_return()
+    dot = np.column_stack([np.linspace(0, 0.5, len(t)), np.linspace(0, 0.5, len(t))])
+    letters = np.stack([t, dot])
+    with_bar = compose_word(letters, "ta", GenerateSettings(method="straight"))[0]
+    without = compose_word(
+        letters, "ta", GenerateSettings(method="straight", delayed_strokes=False)
+    )[0]
+    first = lambda word: word.points[word.segment == 0]  # noqa: E731
+    assert len(first(with_bar)) < len(first(without)) == len(t)

@@ -22,7 +22,7 @@ from prg.fields import check_ranges
 from prg.pipeline.connect import ConnectionSettings, connect_sequence
 from prg.pipeline.dmp import basis_count, fit_dmp, rollout
 from prg.pipeline.layout import LayoutSettings, layout_letters, word_breaks
-from prg.pipeline.marks import MarkSettings, letter_marks
+from prg.pipeline.marks import MarkSettings, crossed_exit, letter_marks
 from prg.pipeline.timing import stroke_duration, timed_body
 from prg.pipeline.word import DEFAULT_SPEED_CM_S, WordTrajectory, assemble_word
 
@@ -129,6 +129,12 @@ def compose_word(
     """
     params = params or GenerateSettings()
     placed = layout_letters(list(letters), text, params.layout)
+    if params.delayed_strokes:  # the bar is its own stroke: a crossed letter ends at its foot
+        chars = [c for c in text if c != " "]
+        placed = [
+            crossed_exit(p) if params.marks.mark_of(c) == "bar" else p
+            for c, p in zip(chars, placed)
+        ]
     connections = connect_sequence(
         placed, params.connection, method=params.method, breaks=word_breaks(text)
     )

@@ -129,6 +129,42 @@ def bar_for(points: np.ndarray, char: str, settings: MarkSettings, layout: Layou
     return np.column_stack([np.linspace(x - half, x + half, n), np.full(n, y)])
 
 
+#: A crossed letter is cut where its foot has risen this share of the letter's height.
+EXIT_RISE = 0.25
+
+
+def crossed_exit(points: np.ndarray) -> np.ndarray:
+    """A crossed letter (t, f) cut where a writer leaves it: its foot, the bar drawn later.
+
+    Some writers' one-stroke ``t`` goes down the stem, round the foot and back up and across to
+    draw its bar; laid out beside other letters that return reads as a ``b`` ("little" read as
+    "libble"), and the next connection leaves from inside the letter. With the bar written as a
+    delayed stroke, the letter ends where its foot has risen ``EXIT_RISE`` of the letter's
+    height, when the rest of the path goes back left of that point (a return to the stem); a
+    letter whose foot simply leaves to the right, or that ends at its foot, is kept whole.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 2)
+        The letter, y up.
+
+    Returns
+    -------
+    ndarray, shape (m, 2), m <= n
+        The letter up to its exit (a prefix of ``points``).
+    """
+    y = points[:, 1]
+    height = float(np.ptp(y))
+    top = int(np.argmax(y))
+    foot = top + int(np.argmin(y[top:]))
+    risen = np.nonzero(y[foot:] - y[foot] > EXIT_RISE * height)[0]
+    if height <= 0 or not len(risen):
+        return points
+    cut = foot + int(risen[0])
+    returns = points[cut:, 0].min() < points[cut, 0] - EXIT_RISE * height
+    return points[: cut + 1] if returns and cut >= 2 else points
+
+
 def letter_marks(
     letters: list[np.ndarray],
     text: str,
@@ -166,6 +202,7 @@ __all__ = [
     "MarkSettings",
     "bar_for",
     "bar_height_cm",
+    "crossed_exit",
     "dot_for",
     "letter_marks",
     "stem_crossings",
