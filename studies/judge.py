@@ -146,15 +146,15 @@ def more_robot_words(folder: str | os.PathLike, per_word: int) -> list[Stimulus]
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(1, per_word + 1):
             where = Path(tmp) / str(k)
-            seed = f"generate.seed={k * len(words)}"
             generate_robot_words(
                 words,
                 where,
                 family=robot["family"],
                 ckpt=robot.get("ckpt"),
-                overrides=[*robot["write_overrides"], seed],
+                overrides=robot["write_overrides"],
                 delayed_strokes=delayed,
                 hand_per_word=robot.get("hands", "per_word") == "per_word",
+                seed=k * len(words),
             )
             for word, sample in load_robot_words(where, words, delayed).items():
                 image = render_sample(sample, style)

@@ -273,6 +273,18 @@ def test_svg_curves_are_sampled_and_pass_through_their_end_points():
         path_strokes("M 0 0 L 5", "x")
 
 
+def test_svg_backgrounds_and_shapes_are_not_pen_strokes(tmp_path):
+    (tmp_path / "eve").mkdir()
+    (tmp_path / "eve" / "cat.svg").write_text(
+        '<svg xmlns="http://www.w3.org/2000/svg" width="6cm" height="2cm" viewBox="0 0 6 2">'
+        '<rect width="100%" height="100%" fill="#fff"/><circle cx="1" cy="1" r="0.5"/>'
+        '<polyline points="1,1 2,1.5 3,1"/></svg>'
+    )
+    sample = load_human_samples([tmp_path], ["cat"]).by_word["cat"]["eve"]
+    assert not sample.lifted  # read in the file's user units: no viewBox scaling
+    np.testing.assert_allclose(sample.strokes[0], [[1, -1], [2, -1.5], [3, -1]])
+
+
 # ---------------------------------------------------------------------------- robot samples
 def test_robot_words_are_read_from_either_layout(tmp_path):
     robot_dir(tmp_path / "flat", ["cat", "dog"])
@@ -380,3 +392,23 @@ def test_robot_words_are_written_with_delayed_strokes_as_asked(
     assert kinds.count("mark") == (2 if delayed else 0)  # the i's dot and the t's bar
     robot = load_robot_words(tmp_path, ["it"])["it"]
     assert len(robot.delayed) == kinds.count("mark") == len(robot.strokes) - 1
+
+
+@pytest.mark.parametrize(
+    "overrides",
+    [
+        [],
+        ["generate.temperature=0.3", "generate.mode=posterior"],
+        ["generate.hand_seed=3", "layout.gap=0.3", "marks.dotted=j"],
+        ["connection.alpha_max_deg=25", "++generate.impute_steps=10"],
+    ],
+)
+def test_the_robot_writes_with_prg_writes_settings(overrides):
+    from prg.commands.cli import compose_config
+    from prg.commands.settings import generate_settings
+    from studies.stimuli import write_settings
+
+    for delayed in (True, False):
+        args = ["family=muse", f"delayed_strokes={str(delayed).lower()}", *overrides]
+        expected = generate_settings(compose_config("write", args))
+        assert write_settings(overrides, delayed).generate == expected
