@@ -1,4 +1,5 @@
-"""`benchmarks/summarize.py`: the README's result tables come from the JSON, and stay in step."""
+"""`benchmarks/summarize.py`: the result tables of `benchmarks/results.md` and of the docs pages
+(`docs/results.md`, `docs/benchmarks.md`) come from the JSON, and stay in step."""
 
 import importlib.util
 import json
@@ -15,9 +16,48 @@ summarize = sys.modules["bench_summarize"] = importlib.util.module_from_spec(spe
 spec.loader.exec_module(summarize)
 
 
-def test_results_md_and_readme_match_the_committed_json(capsys):
+def test_results_md_and_the_docs_pages_match_the_committed_json(capsys):
     code = summarize.main(["--check"])
     assert code == 0, capsys.readouterr().err
+
+
+def test_the_docs_pages_hold_the_generated_blocks():
+    assert {
+        p.relative_to(summarize.ROOT).as_posix(): names for p, names in summarize.BLOCKS.items()
+    } == {
+        "docs/results.md": ("demo", "converged"),
+        "docs/benchmarks.md": ("benchmarks",),
+    }
+
+
+def test_check_names_each_stale_page_on_one_line_and_a_run_refreshes_them(
+    tmp_path, monkeypatch, capsys
+):
+    outputs = sys.modules[summarize.main.__module__]
+    pages = {}
+    for path, names in summarize.BLOCKS.items():
+        page = tmp_path / path.name
+        page.write_text(
+            "# a page\n\n"
+            + "".join(f"<!-- generated:{n} -->\nold\n<!-- end:{n} -->\n" for n in names)
+        )
+        pages[page] = names
+    summary = tmp_path / "summary.md"
+    summary.write_text(summarize.results_markdown())
+    monkeypatch.setattr(outputs, "BLOCKS", pages)
+    monkeypatch.setattr(outputs, "SUMMARY", summary)
+    assert summarize.main(["--check"]) == 1
+    stale = capsys.readouterr().err.splitlines()
+    assert stale == [f"summarize: {page} is stale: run `make results`" for page in pages]
+    assert summarize.main([]) == 0
+    assert summarize.main(["--check"]) == 0
+    benchmarks, results = (
+        (tmp_path / "benchmarks.md").read_text(),
+        (tmp_path / "results.md").read_text(),
+    )
+    assert benchmarks.startswith("# a page\n\n<!-- generated:benchmarks -->\nRatio = ours / ")
+    assert summarize.demo_markdown() in results and summarize.converged_markdown() in results
+    assert "\nold\n" not in results + benchmarks
 
 
 def test_every_benchmark_json_gives_rows_with_a_reference_and_a_finite_ratio():
@@ -73,8 +113,16 @@ def test_bad_inputs_are_named(tmp_path):
     (results / "bench_dmp.json").write_text("{}")
     with pytest.raises(summarize.SummaryError, match=r"bench_dmp\.json: unexpected content"):
         summarize.benchmark_rows(results)
-    with pytest.raises(summarize.SummaryError, match="no <!-- generated:demo -->"):
-        summarize.fill_block("# README without blocks\n", "demo", "x")
+    with pytest.raises(
+        summarize.SummaryError, match=r"docs/results\.md: no <!-- generated:demo -->"
+    ):
+        summarize.fill_block("# a page without blocks\n", "demo", "x", "docs/results.md")
+    page = tmp_path / "results.md"
+    page.write_text("<!-- generated:demo -->\n<!-- end:demo -->\n")  # no converged block
+    with pytest.raises(summarize.SummaryError, match=r"results\.md: no <!-- generated:converged"):
+        summarize.docs_texts({page: ("demo", "converged")})
+    with pytest.raises(summarize.SummaryError, match=r"absent\.md: not readable"):
+        summarize.docs_texts({tmp_path / "absent.md": ("demo",)})
     with pytest.raises(summarize.SummaryError, match="missing"):
         summarize.demo_markdown(tmp_path)
 
@@ -124,18 +172,6 @@ def test_demo_tables_show_the_paper_convention_folded_coherence_and_roughness(tm
     assert _row(text, SMOOTHNESS, "PRG_AVAE(T,S)") == ["1.23", "-"]
     assert "(0.081)" in text.split(SMOOTHNESS)[1]
     assert "predates" not in text
-
-
-def test_an_old_snapshot_shows_its_trajectory_cells_only_under_the_models_own_std(tmp_path):
-    """Before the two conventions, `logp_T*` held the models' own std (0.1)."""
-    text = _demo_with(
-        tmp_path,
-        {"avae_ts/logp_T": 206.16, "avae_ts/logp_S": -5.21, "avae_ts/coherence_T_given_S": 0.7},
-    )
-    assert _row(text, TABLE1, "PRG_AVAE(T,S)")[:2] == ["-", "-5.2 (-4.17)"]
-    assert _row(text, OWN, "PRG_AVAE(T,S)")[0] == "206.2"
-    assert "predates the unit-variance table" in text.split(OWN)[0]
-    assert _row(text, COHERENCE, "PRG_AVAE(T,S)")[0] == "70% / -"
 
 
 def test_speed_techniques_and_time_to_quality_become_rows_against_their_references(tmp_path):
@@ -196,7 +232,7 @@ def test_speed_techniques_and_time_to_quality_become_rows_against_their_referenc
     assert quality["0.7"].reference_value == "not reached in 30.0 CPU min"
     assert quality["0.7"].ratio == pytest.approx(0.2) and "upper bound" in quality["0.7"].figure
     assert quality["0.85"].ours == "not reached in 9.0 CPU min"
-    assert math.isnan(quality["0.85"].ratio) and summarize._ratio(quality["0.85"].ratio) == "-"
+    assert math.isnan(quality["0.85"].ratio) and summarize.ratio_text(quality["0.85"].ratio) == "-"
 
 
 def _converged_root(tmp_path, status: str = "ok") -> Path:
