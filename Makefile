@@ -46,7 +46,7 @@ demo: setup ## Run the whole pipeline (dvc repro): data, models, evaluation, Tab
 	@echo
 	@echo "Dataset:  data/prepared/synthetic/ (train/val/test.npz, manifest.json, figures/)"
 	@echo "Models:   models/<family>/model.ckpt and metrics.json  (dvc metrics show)"
-	@echo "Serving:  registered as prg-<family> (alias champion) in mlruns.db: mlflow models serve -m models:/prg-muse@champion --env-manager local"
+	@echo "Serving:  registered as prg-<family> (alias champion) in mlruns.db: MLFLOW_TRACKING_URI=sqlite:///mlruns.db mlflow models serve -m models:/prg-muse@champion --env-manager local"
 	@echo "Plots:    dvc plots show (training curves, coherence per class, robustness) -> dvc_plots/index.html"
 	@echo "Reports:  reports/table1.md, coherence.md, robustness.md, likeness.md, styles.md, kinematics.md, figures/"
 	@echo "Words:    reports/dictaphone/table2.png, table2.md; <word>/<sound|image>/word.rrd (rerun FILE)"

@@ -240,19 +240,24 @@ def _tracking(uri: str):
     """MLflow's global tracking URI set to ``uri`` for the block (the fluent API and the
     registry's ``models:/`` resolution read it), then restored; MLflow's artifact progress bars
     off meanwhile: logging a model downloads its artifacts to validate the input example, and
-    those bars would take the place of the training's own progress bar in its output."""
+    those bars would take the place of the training's own progress bar in its output.
+
+    A URI that was not set before is unset again, not set to what ``mlflow.get_tracking_uri()``
+    answers then (MLflow 3's default, ``sqlite:///mlflow.db`` in the working folder):
+    ``set_tracking_uri`` also exports ``MLFLOW_TRACKING_URI``, which :func:`prg.tracking.tracking_uri`
+    puts first, so every later run of the process and of its children would go to that file."""
     import os
 
     import mlflow
 
-    previous = mlflow.get_tracking_uri()
+    previous = mlflow.get_tracking_uri() if mlflow.is_tracking_uri_set() else None
     bars = os.environ.get("MLFLOW_ENABLE_ARTIFACTS_PROGRESS_BAR")
     mlflow.set_tracking_uri(uri)
     os.environ["MLFLOW_ENABLE_ARTIFACTS_PROGRESS_BAR"] = "false"
     try:
         yield
     finally:
-        mlflow.set_tracking_uri(previous)
+        mlflow.set_tracking_uri(previous)  # None: unset, MLFLOW_TRACKING_URI removed with it
         if bars is None:
             os.environ.pop("MLFLOW_ENABLE_ARTIFACTS_PROGRESS_BAR", None)
         else:
