@@ -36,14 +36,23 @@ IMPUTED = "imputed"
 class LikelihoodSettings:
     """How Table I is estimated (``likelihood``).
 
-    cells : ``"all"``, or the Table I cells to estimate (:data:`TABLE1_CELLS` names); named
+    Attributes
+    ----------
+    cells
+        ``"all"``, or the Table I cells to estimate (:data:`TABLE1_CELLS` names); named
         cells must be ones every evaluated model supports.
-    k_marginal, k_conditional : importance samples per test sample of ``log p(x_m)`` and of
+    k_marginal, k_conditional
+        importance samples per test sample of ``log p(x_m)`` and of
         ``log p(x_a | x_b)`` (the paper's 1000 and 5000).
-    n_test : test samples (None: all; else a seeded subset).
-    batch_size : test samples per step; chunk_rows : at most this many decoder outputs alive at
+    n_test
+        test samples (None: all; else a seeded subset).
+    batch_size
+        test samples per step.
+    chunk_rows
+        at most this many decoder outputs alive at
         once (bounds the memory).
-    traj_std : std of the trajectory Gaussian in the main table (None: each model's own).
+    traj_std
+        std of the trajectory Gaussian in the main table (None: each model's own).
     """
 
     cells: str | tuple[str, ...] = "all"
@@ -78,12 +87,18 @@ class LikelihoodSettings:
 class CoherenceSettings:
     """How generated samples are scored (``coherence``).
 
-    temperatures : generation kind -> temperature (0: the posterior mean; 1: latents drawn with
+    Attributes
+    ----------
+    temperatures
+        generation kind -> temperature (0: the posterior mean; 1: latents drawn with
         their std); the first kind is the robustness table's.
-    impute_steps : families that impute (MUSE) are also scored as the ``imputed`` kind, the
+    impute_steps
+        families that impute (MUSE) are also scored as the ``imputed`` kind, the
         posterior mean after this many rounds of imputing the missing modalities (0: not).
-    batch_size : test samples generated at once.
-    image_shifts : models that take an image alone are also scored on the test images moved
+    batch_size
+        test samples generated at once.
+    image_shifts
+        models that take an image alone are also scored on the test images moved
         off-centre by up to each of these many pixels per axis (a seeded random offset per
         image; the robustness report's second table); empty: not.
     """

@@ -1,4 +1,4 @@
-"""How jittery a trajectory is: roughness = sum of |second differences| / arc length.
+"""How jittery a trajectory is: roughness = sum of ``|second differences|`` / arc length.
 
 A letter's 100 points are equidistant along the arc after preprocessing, so a smooth stroke has
 second differences close to zero (they grow only with curvature), while a decoder that has not

@@ -56,8 +56,12 @@ read by its most probable class); ``pixels``, a grey image (drawn as one, classi
 class ShapeOption:
     """The ``prg-prepare`` option that sets a modality's stored shape.
 
-    key : the option (``data.preprocess.n_points``).
-    value : the option's value that gives a split array of a shape (``(N, 200)`` -> 100); for a
+    Attributes
+    ----------
+    key
+        the option (``data.preprocess.n_points``).
+    value
+        the option's value that gives a split array of a shape (``(N, 200)`` -> 100); for a
         shape no value gives, the part of the shape to show instead.
     """
 

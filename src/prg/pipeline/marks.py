@@ -43,13 +43,21 @@ BAR_STEP_CM = 0.05  # the bar's points are this far apart (as the connection str
 class MarkSettings:
     """Which letters get a delayed stroke and its size (fractions of the letter height ``H``).
 
-    dotted : letters that get a dot above the stem (``"ij"``).
-    crossed : letters that get a bar across the stem (``"tf"``).
-    dot_gap : space between the stem's top and the dot (0.2 H: 0.4 of the x-height).
-    dot_radius : the dot's radius (0.015 H: 0.22 mm for a 1.5 cm letter; a circle that small
+    Attributes
+    ----------
+    dotted
+        letters that get a dot above the stem (``"ij"``).
+    crossed
+        letters that get a bar across the stem (``"tf"``).
+    dot_gap
+        space between the stem's top and the dot (0.2 H: 0.4 of the x-height).
+    dot_radius
+        the dot's radius (0.015 H: 0.22 mm for a 1.5 cm letter; a circle that small
         under a 0.4 mm pen inks a filled dot, not a ring).
-    bar_width : length of a bar (0.4 H).
-    bar_height : height of a bar as a fraction of the x-height (1.0: on the x-height line).
+    bar_width
+        length of a bar (0.4 H).
+    bar_height
+        height of a bar as a fraction of the x-height (1.0: on the x-height line).
     """
 
     dotted: str = "ij"

@@ -83,7 +83,7 @@ def perceive_trajectories(
     Returns
     -------
     ndarray, shape (N, 2 * n_points), float32
-        Interleaved ``x1, y1, x2, y2, ...`` (``TRAJ_LAYOUT``), y up, centred, max |coord| = 1.
+        Interleaved ``x1, y1, x2, y2, ...`` (``TRAJ_LAYOUT``), y up, centred, max ``|coord|`` = 1.
 
     Raises
     ------

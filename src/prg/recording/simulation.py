@@ -8,7 +8,7 @@ entity                              archetype             when
 ==================================  ====================  =========================================
 ``world``                           ViewCoordinates       static: right-handed, z up (metres)
 ``world/table``, ``world/paper``    Boxes3D               static
-``world/<arm>/...``                  URDF (Rerun's import)  static: link meshes, frames, joints at 0
+``world/<arm>/...``                 URDF (Rerun import)   static: link meshes, frames, joints at 0
 ``world/<arm>/base``                Transform3D           static: ``tf#/world`` -> the URDF's root
 ``world/<arm>/joints/<joint>``      Transform3D           per frame, one ``send_columns`` per joint
 ``world/pen/body``                  Cylinders3D           static, in the flange link's frame

@@ -35,7 +35,7 @@ def best_checkpoint(trainer: L.Trainer) -> str:
 
 class LastCheckpoint(Checkpoint):
     """Keeps ``<dirpath>/last.ckpt``, the checkpoint to resume from after a crash or a kill
-    (``prg-train ... ckpt_path=last``). It is written
+    (``prg-train ckpt_path=last``). It is written
 
     * every ``every_n_train_steps`` optimizer steps inside an epoch (0: never), so a kill loses
       at most that many steps; Lightning resumes such a checkpoint mid-epoch, running only the
@@ -311,8 +311,10 @@ class StepMeans(L.Callback):
 
 
 class TrajectoryNLL(L.Callback):
-    """``val/nll_per_dim_traj`` (in MLflow ``val/nll_per_dim_T``): one validation number every
-    family logs on the same footing, to compare families in one column.
+    """The validation trajectories' NLL per dimension, one number every family logs alike.
+
+    Logged as ``val/nll_per_dim_traj`` (in MLflow ``val/nll_per_dim_T``), to compare families in
+    one column.
 
     The negative log-likelihood of each validation trajectory under the model's own Gaussian
     (``traj_std``, 0.1 in every family's config), decoded from the posterior mean given the

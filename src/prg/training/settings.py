@@ -16,9 +16,14 @@ from prg.errors import SettingsError
 class TrainSettings:
     """The model family a run fits and the modalities the data provide for it.
 
-    model : the family's name (``model.name``).
-    modalities : the modalities the model takes (``model.modalities``).
-    provided : the modalities the dataset provides (``data.loader.modalities``); every one of
+    Attributes
+    ----------
+    model
+        the family's name (``model.name``).
+    modalities
+        the modalities the model takes (``model.modalities``).
+    provided
+        the modalities the dataset provides (``data.loader.modalities``); every one of
         ``modalities`` must be among them.
     """
 

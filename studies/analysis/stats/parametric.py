@@ -41,6 +41,21 @@ def one_sample_ttest(
 
     Reference: ``scipy.stats.ttest_1samp(x, popmean, alternative=...)``; the CI is the
     two-sided ``1 - alpha`` t interval of the mean.
+
+    Examples
+    --------
+    Confidence ratings of four participants, two each, against the scale's midpoint 3:
+
+    >>> import pandas as pd
+    >>> from studies.analysis.stats import one_sample_ttest
+    >>> ratings = pd.DataFrame(
+    ...     {"confidence": [4, 5, 3, 4, 4, 5, 2, 4], "participant_id": list("aabbccdd")}
+    ... )
+    >>> row = one_sample_ttest(ratings, popmean=3.0, cluster="participant_id").iloc[0]
+    >>> int(row["n"]), float(row["estimate"]), round(float(row["statistic"]), 3)
+    (4, 3.875, 2.333)
+    >>> round(float(row["p_value"]), 3)
+    0.102
     """
     if cluster is None:
         x = values(df, value)

@@ -17,7 +17,16 @@ def proportion_ci(k, n, alpha: float = 0.05, method: str = "wilson"):
 
     At k = n (k = 0) the Wilson and exact bounds are 1 (0) in exact arithmetic, but statsmodels
     returns them with round-off (1 - 1e-16), which puts the rate outside its own interval and
-    gives a negative error bar: a word every participant got right is a real outcome."""
+    gives a negative error bar: a word every participant got right is a real outcome.
+
+    Examples
+    --------
+    >>> low, high = proportion_ci(21, 50)  # Wilson, 95 %
+    >>> round(low, 3), round(high, 3)
+    (0.294, 0.558)
+    >>> proportion_ci(10, 10)[1]  # never below the rate itself
+    1.0
+    """
     from statsmodels.stats.proportion import proportion_confint
 
     k_arr, n_arr = np.asarray(k, dtype=float), np.asarray(n, dtype=float)
@@ -45,6 +54,19 @@ def binomial_test(
     -------
     DataFrame
         One row (:data:`~studies.analysis.stats.common.TEST_COLUMNS`).
+
+    Examples
+    --------
+    The paper's Turing question: 21 of 50 picks of the robot among five words, chance 1/5.
+
+    >>> import pandas as pd
+    >>> from studies.analysis.stats import binomial_test
+    >>> trials = pd.DataFrame({"chose_robot": [1] * 21 + [0] * 29})
+    >>> row = binomial_test(trials, chance=0.2).iloc[0]
+    >>> float(row["estimate"]), round(float(row["ci_low"]), 3), round(float(row["ci_high"]), 3)
+    (0.42, 0.282, 0.568)
+    >>> bool(row["p_value"] < 0.001), bool(row["reject"])
+    (True, True)
     """
     k, n = successes(df, outcome)
     res = stats.binomtest(k, n, chance, alternative=alternative)

@@ -148,6 +148,21 @@ def rollout(
     -------
     ndarray, shape (n_samples, dims)
         ``y(t_k)`` at ``t_k = k tau / (n_samples - 1)``; row 0 is ``y0``.
+
+    Examples
+    --------
+    The same movement towards another goal: the shape is kept, the end moves.
+
+    >>> import numpy as np
+    >>> from prg.pipeline.dmp import fit_dmp, rollout
+    >>> t = np.linspace(0, 1, 201)
+    >>> s = 10 * t**3 - 15 * t**4 + 6 * t**5
+    >>> dmp = fit_dmp(np.column_stack([s, np.sin(np.pi * s)]), tau=2.0, n_basis=40)
+    >>> path = rollout(dmp, n_samples=201, goal=[2.0, 0.0])
+    >>> path.shape
+    (201, 2)
+    >>> path[0].tolist(), bool(np.allclose(path[-1], [2.0, 0.0], atol=0.05))
+    ([0.0, 0.0], True)
     """
     if not isinstance(dmp, DMP):
         raise UsageError(f"dmp: expected a DMP, got {type(dmp).__name__}")

@@ -90,6 +90,21 @@ def fit_dmp(
     ------
     ValueError
         (:class:`prg.errors.UsageError`) naming the argument that is out of range.
+
+    Examples
+    --------
+    A rest-to-rest stroke, fitted over two seconds and rolled out again:
+
+    >>> import numpy as np
+    >>> from prg.pipeline.dmp import fit_dmp, rollout
+    >>> t = np.linspace(0, 1, 201)
+    >>> s = 10 * t**3 - 15 * t**4 + 6 * t**5  # minimum jerk: starts and ends at rest
+    >>> stroke = np.column_stack([s, np.sin(np.pi * s)])
+    >>> dmp = fit_dmp(stroke, tau=2.0, n_basis=40)
+    >>> dmp.tau, dmp.n_basis
+    (2.0, 40)
+    >>> bool(np.abs(rollout(dmp, n_samples=201) - stroke).max() < 1e-3)
+    True
     """
     y = _points(points)
     n = y.shape[0]
