@@ -461,12 +461,15 @@ def main() -> None:
         },
         "summary": summary,
         "not_measured": not_measured,
-        "utterances": records,
+        "utterances_log": f"logs/{args.out.name}",
     }
     out = args.out
-    out.parent.mkdir(parents=True, exist_ok=True)
+    # the per-utterance records are a log, not a result: beside the summary, git-ignored
+    log = out.parent / "logs" / out.name
+    log.parent.mkdir(parents=True, exist_ok=True)
+    write_json(log, {"utterances": records})
     write_json(out, report)
-    print(f"\nwrote {out}")
+    print(f"\nwrote {out} (per-utterance log: {log})")
 
 
 if __name__ == "__main__":
