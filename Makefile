@@ -3,7 +3,7 @@ SHELL := /bin/bash
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
-EXTRAS ?= dev,sweep,speech,speech-base,speech-moonshine,browser,lasa
+EXTRAS ?= dev,docs,sweep,speech,speech-base,speech-moonshine,browser,lasa
 # Debian packages: espeak-ng speaks the test and demo words, sox converts their audio, chromium
 # runs the study pages in the browser tests (Playwright drives it; no `playwright install`)
 SYSTEM_PACKAGES ?= espeak-ng sox chromium
@@ -12,7 +12,7 @@ STAMP := $(VENV)/.setup-$(shell cat pyproject.toml | sha1sum | cut -c1-12)
 export PATH := $(CURDIR)/$(BIN):$(PATH)
 
 .DEFAULT_GOAL := help
-.PHONY: help system setup demo paper converged test test-all lint format bench results clean mutate
+.PHONY: help system setup demo paper converged test test-all lint format bench results clean mutate docs
 
 help: ## Show this help
 	@awk 'BEGIN {FS = ":.*## "} /^[a-zA-Z_-]+:.*## / {printf "  \033[36m%-10s\033[0m %s\n", $$1, $$2}' $(MAKEFILE_LIST)
@@ -81,6 +81,10 @@ test: setup ## Run the default test suite (fast; no `slow` tests)
 test-all: setup ## Run every test, `slow` ones included
 	$(BIN)/pytest -n 2 -q
 
+docs: setup ## Build the documentation site offline (warnings are errors): docs/_build/html
+	$(BIN)/sphinx-build -W --keep-going -q -b html docs docs/_build/html
+	@echo "Docs: docs/_build/html/index.html"
+
 lint: setup ## Check style with ruff
 	$(BIN)/ruff check src studies tests benchmarks
 	$(BIN)/ruff format --check src studies tests benchmarks
@@ -116,7 +120,7 @@ bench: setup ## Run the benchmarks (tables printed, JSON under benchmarks/result
 	$(BIN)/python benchmarks/bench_startup.py
 	$(MAKE) results
 
-results: setup ## benchmarks/results.md and the README's result tables from the JSON (after `make demo`: SNAPSHOT=1)
+results: setup ## benchmarks/results.md and the docs pages' result tables from the JSON (after `make demo`: SNAPSHOT=1)
 	$(BIN)/python benchmarks/summarize.py $(if $(SNAPSHOT),--snapshot)
 
 # Mutation testing, not in CI: mutmut ([tool.mutmut] in pyproject.toml) mutates a copy of the
