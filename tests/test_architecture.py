@@ -26,11 +26,19 @@ def imported_modules(path: Path) -> set[str]:
 
 
 def test_no_command_imports_another_command():
-    commands = {p.stem for p in COMMANDS.glob("*.py")} - SHARED - {"__init__"}
+    # a command is a module commands/<name>.py or a package commands/<name>/
+    packages = {p.parent.name for p in COMMANDS.glob("*/__init__.py")}
+    commands = ({p.stem for p in COMMANDS.glob("*.py")} | packages) - SHARED - {"__init__"}
     assert {"write", "dictaphone", "simulate", "train", "evaluate", "prepare"} <= commands
-    for path in COMMANDS.glob("*.py"):
-        others = {f"prg.commands.{c}" for c in commands - {path.stem}}
-        assert not imported_modules(path) & others, f"{path.name} imports another command"
+    assert "paper_scale" in packages
+    for path in COMMANDS.rglob("*.py"):
+        own = path.relative_to(COMMANDS).parts[0].removesuffix(".py")
+        others = {f"prg.commands.{c}" for c in commands - {own}}
+        prefixes = tuple(f"{o}." for o in others)  # a package command's modules too
+        reached = {m for m in imported_modules(path) if m in others or m.startswith(prefixes)}
+        assert not reached, (
+            f"{path.relative_to(COMMANDS)} imports another command: {sorted(reached)}"
+        )
 
 
 def test_the_library_does_not_import_the_command_layer():
