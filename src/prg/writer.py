@@ -126,7 +126,7 @@ class WriteResult:
         (``word.dmp``).
     rollout : ndarray, shape (n, 2)
         The DMP's rollout on ``linspace(0, word.dmp.tau, n)`` (the body: the delayed strokes
-        follow it, :func:`prg.sim.word_samples` gives the whole motion).
+        follow it, :func:`prg.pipeline.motion.word_samples` gives the whole motion).
     timings : dict of str to float
         Seconds: ``perceive``, ``decode`` (the model), ``compose`` (layout, connection strokes,
         DMP fit) and ``total``.
@@ -152,13 +152,13 @@ class WriteResult:
     ) -> Path:
         """``word.json``, ``word.png``, ``word.svg``, ``dmp_rollout.csv`` (the body's DMP
         rollout), ``motion.csv`` (the whole timed pen motion, delayed strokes included, with its
-        pen-down flag: :func:`prg.sim.word_samples` at ``settings.samples_per_s``) and
+        pen-down flag: :func:`prg.pipeline.motion.word_samples` at ``settings.samples_per_s``) and
         (``record``) the Rerun recording ``word.rrd`` into ``folder``, all or nothing (through a
         staging folder; other files already in ``folder`` are kept, but a ``word.rrd`` left
         by an earlier word is removed when ``record`` is off). With a ``recorder``
         (:class:`prg.recorder.RecorderProcess`, started before the model was loaded) the
         recording is made there, while this process writes the other files."""
-        from prg.sim.writing import word_samples
+        from prg.pipeline.motion import word_samples
 
         folder = Path(folder)
         with staged_outputs(folder, owned=WORD_FILES) as staging:

@@ -120,8 +120,8 @@ def _rollout(rollout) -> np.ndarray:
 def _motion(word: WordTrajectory, rollout: np.ndarray) -> tuple[np.ndarray, ...]:
     """The body's rollout on its time grid, then the delayed strokes at the same spacing:
     samples, times, pen-down flags."""
+    from prg.pipeline.motion import pen_down_samples
     from prg.pipeline.timing import delayed_samples, stroke_duration
-    from prg.sim.geometry import pen_down_samples
 
     if word.dmp is not None:
         tau = word.dmp.tau

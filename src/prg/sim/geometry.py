@@ -16,6 +16,9 @@ Tracking error
     (:func:`tracking_error`): every commanded sample to the nearest point of the ink polylines
     and every ink point to the nearest point of the commanded polylines. Mean and max are over
     both sets together (the max is the Hausdorff distance of the two paths).
+
+Arc length, arc progress and the pen-down samples along a word are the generation pipeline's
+(:mod:`prg.pipeline.motion`, which ``motion.csv`` is written with); they are re-exported here.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from prg.errors import UsageError
 from prg.fields import FromMapping, as_float, check, positive_float, vector
+from prg.pipeline.motion import arc_length, arc_progress, pen_down_samples  # re-exported
 
 __all__ = [
     "Paper",
@@ -131,13 +135,6 @@ class Paper(FromMapping):
 # ----------------------------------------------------------------------------- paths
 
 
-def arc_length(points: ArrayLike) -> _Float:
-    """Cumulative arc length of a polyline, shape (n,), starting at 0."""
-    pts = np.asarray(points, dtype=np.float64)
-    steps = np.linalg.norm(np.diff(pts, axis=0), axis=1)
-    return np.concatenate([[0.0], np.cumsum(steps)])
-
-
 def bounding_box(points: ArrayLike) -> tuple[_Float, _Float]:
     """Lower-left and upper-right corners of ``points`` (n, 2)."""
     pts = np.asarray(points, dtype=np.float64)
@@ -160,91 +157,6 @@ def place_points(points: ArrayLike, anchor: ArrayLike, scale: float, target: Arr
     """
     pts = np.asarray(points, dtype=np.float64)
     return np.asarray(target, dtype=np.float64) + scale * (pts - np.asarray(anchor, dtype=float))
-
-
-def arc_progress(path: ArrayLike, samples: ArrayLike) -> _Float:
-    """Arc length along ``path`` of each sample of a motion that follows it in order.
-
-    Each sample is projected onto the polyline, searching forward from the previous sample's
-    projection only (within a few sample steps), so a path that crosses itself (loops, a ``t``'s
-    bar) is still followed in order.
-
-    Parameters
-    ----------
-    path : array_like, shape (P, 2)
-        The polyline (e.g. a word's points).
-    samples : array_like, shape (n, 2)
-        Points close to the path, in its order (e.g. the word's DMP rollout).
-
-    Returns
-    -------
-    ndarray, shape (n,)
-        Non-decreasing arc length (same units as ``path``) of each sample's projection.
-    """
-    pts = np.asarray(path, dtype=np.float64)
-    smp = np.asarray(samples, dtype=np.float64)
-    if len(pts) < 2:
-        return np.zeros(len(smp))
-    arc = arc_length(pts)
-    a, b = pts[:-1], pts[1:]
-    d = b - a
-    length2 = np.maximum((d**2).sum(axis=1), 1e-30)
-    step = np.linalg.norm(np.diff(smp, axis=0), axis=1) if len(smp) > 1 else np.zeros(1)
-    # a sample moves at most its own step along the path (plus slack for the DMP's error)
-    reach = 4.0 * (float(step.max()) if len(step) else 0.0) + 0.05 * (arc[-1] / len(pts)) + 1e-9
-    out = np.empty(len(smp))
-    s_prev, first = 0.0, 0
-    for k, point in enumerate(smp):
-        last = int(np.searchsorted(arc, s_prev + reach, side="right"))
-        last = min(max(last, first + 1), len(a))
-        seg = slice(first, last)
-        u = np.clip(((point - a[seg]) * d[seg]).sum(axis=1) / length2[seg], 0.0, 1.0)
-        foot = a[seg] + u[:, None] * d[seg]
-        j = int(np.argmin(((foot - point) ** 2).sum(axis=1)))
-        s = arc[first + j] + u[j] * math.sqrt(length2[first + j])
-        s_prev = max(s_prev, s)
-        out[k] = s_prev
-        first = max(first, int(np.searchsorted(arc, s_prev, side="right")) - 1)
-        first = min(first, len(a) - 1)
-    return out
-
-
-def pen_down_samples(
-    points: ArrayLike, segment: ArrayLike, kinds: Sequence[str], samples: ArrayLike
-) -> NDArray[np.bool_]:
-    """Which samples of a motion along a word are pen-down (not pen-up travel between words).
-
-    Parameters
-    ----------
-    points : array_like, shape (P, 2)
-        The word's points (:class:`~prg.pipeline.word.WordTrajectory` ``points``).
-    segment : array_like of int, shape (P,)
-        Segment id per point.
-    kinds : sequence of str
-        Kind per segment; ``"space"`` segments are pen-up.
-    samples : array_like, shape (n, 2)
-        The motion (e.g. the DMP rollout), in the word's order.
-
-    Returns
-    -------
-    ndarray of bool, shape (n,)
-        False for samples strictly inside a pen-up travel, i.e. past the last point of the letter
-        before it and before the first point of the letter after it (by arc length).
-    """
-    pts = np.asarray(points, dtype=np.float64)
-    seg = np.asarray(segment)
-    down = np.ones(len(samples), dtype=bool)
-    spaces = [k for k, kind in enumerate(kinds) if kind == "space"]
-    if not spaces:
-        return down
-    arc = arc_length(pts)
-    s = arc_progress(pts, samples)
-    for k in spaces:
-        inside = np.flatnonzero(seg == k)
-        before = inside[0] - 1 if inside[0] > 0 else inside[0]
-        after = inside[-1] + 1 if inside[-1] + 1 < len(pts) else inside[-1]
-        down &= ~((s > arc[before]) & (s < arc[after]))
-    return down
 
 
 def runs(mask: ArrayLike) -> list[tuple[int, int]]:

@@ -2,8 +2,8 @@
 
 :func:`simulate_word` is the task's core, in steps that read top to bottom:
 
-1. **place** the word: its DMP rollout (:func:`word_samples`) scaled and moved to its place on
-   the paper;
+1. **place** the word: its DMP rollout (:func:`prg.pipeline.motion.word_samples`) scaled and
+   moved to its place on the paper;
 2. **plan and solve**: refuse a word that does not fit the arm's reachable workspace there (one
    line giving the size that would fit, :func:`prg.sim.workspace.check_workspace`), plan the
    pen's motion (:mod:`prg.sim.plan`) and solve the inverse kinematics of every waypoint
@@ -32,14 +32,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from prg.errors import UsageError
 from prg.files import staged_outputs, write_json
+from prg.pipeline.motion import word_samples  # re-exported
 from prg.pipeline.word import WordTrajectory
 from prg.sim.geometry import (
     bounding_box,
     in_contact,
     max_ink_gap,
-    pen_down_samples,
     place_points,
     runs,
     tracking_error,
@@ -54,73 +53,6 @@ from prg.sim.workspace import ReachMap, check_workspace
 log = logging.getLogger(__name__)
 
 __all__ = ["SimResult", "simulate_word", "word_samples"]
-
-
-# ----------------------------------------------------------------------------- the word
-
-
-MAX_WRITING_S = 600.0  # simulated seconds of writing (a 64-letter line takes about 140 s)
-
-
-def _check_duration(word: WordTrajectory, seconds: float, tempo: float) -> None:
-    if not seconds <= MAX_WRITING_S:
-        raise UsageError(
-            f"word {word.text[:40]!r} takes {seconds:.0f} s to write at tempo={tempo:g}: accepted "
-            f"are at most {MAX_WRITING_S:.0f} s of writing; lower tempo or write fewer letters"
-        )
-
-
-def word_samples(
-    word: WordTrajectory, dt: float, tempo: float = 1.0
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
-    """The word's motion, sampled every ``dt`` seconds: the body's DMP rollout, then each delayed
-    stroke and the pen-up travel to it (:func:`prg.pipeline.timing.stroke_samples`).
-
-    Parameters
-    ----------
-    word : WordTrajectory
-        With ``word.dmp`` (from ``prg-write``; fitted to the body); without one, the body's
-        points are followed at ``word.speed_cm_s`` with 0.3 s speed ramps.
-    dt : float
-        Sample spacing (s), about; each part's duration is divided evenly.
-    tempo : float
-        Multiplies the duration.
-
-    Returns
-    -------
-    samples : ndarray, shape (n, 2)
-        Centimetres, the word's own frame.
-    t : ndarray, shape (n,)
-        Seconds from 0, increasing.
-    pen_down : ndarray of bool, shape (n,)
-        False on the pen-up travel between words and to the delayed strokes.
-    """
-    from prg.pipeline.timing import delayed_samples, rest_to_rest_samples
-
-    body = word.points[: word.body_end]
-    after_xy, after_t, after_down = delayed_samples(word, dt, tempo)
-    after_s = float(after_t[-1]) if len(after_t) else 0.0
-    dmp = word.dmp
-    if dmp is not None:
-        from prg.pipeline.dmp import rollout
-
-        if dmp.dims != 2:
-            raise UsageError(f"word {word.text!r}: the DMP must be 2-D, it has {dmp.dims} dims")
-        tau = dmp.tau * tempo
-        _check_duration(word, tau + after_s, tempo)
-        samples = rollout(dmp, tau=tau, dt=dt)
-    else:
-        body_s = float(np.linalg.norm(np.diff(body, axis=0), axis=1).sum()) / word.speed_cm_s
-        _check_duration(word, body_s * tempo + after_s, tempo)
-        samples, tau = rest_to_rest_samples(body, word.speed_cm_s, 0.3, 1 / (dt * tempo))
-        tau *= tempo
-    t = np.linspace(0.0, tau, len(samples))
-    down = pen_down_samples(body, word.segment[: word.body_end], word.segment_kinds, samples)
-    return (
-        np.concatenate([samples, after_xy]),
-        np.concatenate([t, tau + after_t]),
-        np.concatenate([down, after_down]),
-    )
 
 
 # ----------------------------------------------------------------------------- result
