@@ -1,9 +1,10 @@
 """The paper's path as one library call: Perceive -> Represent -> Generate.
 
->>> from prg import Writer
->>> writer = Writer.from_checkpoint("models/muse/model.ckpt")     # the model is loaded once
->>> result = writer.write(text="hello")                           # or audio=, images=, trajectories=
->>> result.word.dmp.n_basis, result.save("outputs/hello")
+The model is loaded once; ``write`` takes ``text=``, ``audio=``, ``images=``,
+``trajectories=`` or any subset (the doctested example is on :class:`Writer`)::
+
+    writer = Writer.from_checkpoint("models/muse/model.ckpt")
+    writer.write(text="hello").save("outputs/hello")
 
 :meth:`Writer.write` takes any subset of the command's channels — the text (the S channel, as a
 speech recogniser yields it), a sound file (recognised into that text), images of the letters (the
@@ -239,6 +240,21 @@ class Writer:
         trajectories ``(k, 200)`` and their ``k`` letters. Every word is then written in that
         hand: the person's own letters for the classes they gave, the nearest training
         writer's for the rest.
+
+    Examples
+    --------
+    With a model trained by ``make demo`` (any checkpoint of ``prg-train``):
+
+    >>> from prg import Writer
+    >>> writer = Writer.from_checkpoint("models/muse/model.ckpt")
+    >>> result = writer.write(text="hello")
+    >>> result.text, result.letters.shape
+    ('hello', (5, 100, 2))
+    >>> kinds = set(result.word.segment_kinds)  # the letters and the strokes joining them
+    >>> sorted(kinds & {"letter", "connection"})
+    ['connection', 'letter']
+    >>> bool(result.word.duration_s > 0) and result.word.dmp.n_basis > 0
+    True
     """
 
     def __init__(
