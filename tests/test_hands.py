@@ -128,6 +128,26 @@ def test_decoding_in_a_hand_is_seeded_and_its_temperature_scales_the_variation(m
     assert np.abs(far - mean).mean() > np.abs(a - mean).mean()
 
 
+def test_a_blend_of_writers_decodes_the_mean_of_their_codes(muse):
+    import torch
+
+    from prg.models.modalities import TRAJ
+
+    model, bank = muse
+    labels = np.arange(NUM_CLASSES)[:6]
+    first, second = (components(bank, Hand(w), labels, seed=0) for w in (0, 1))
+    alone = decode_in_hand(model, first, labels, 0.0, seed=1)
+    np.testing.assert_allclose(
+        decode_in_hand(model, np.stack([first, first]), labels, 0.0, 1), alone
+    )
+    blend = decode_in_hand(model, np.stack([first, second]), labels, 0.0, seed=1)
+    with torch.no_grad():  # by hand: the two codes' mean, decoded
+        codes = [model.encoders[TRAJ](torch.from_numpy(c))[0] for c in (first, second)]
+        mean = model.likelihoods.mean(TRAJ, model.decoders[TRAJ]((codes[0] + codes[1]) / 2))
+    np.testing.assert_allclose(blend, mean.numpy().reshape(6, 100, 2), atol=1e-6)
+    assert not np.allclose(blend, alone)
+
+
 def _letters(rng, n):
     return [letter_like(rng) for _ in range(n)]
 
@@ -184,15 +204,20 @@ def test_a_style_npz_with_the_wrong_shape_is_refused(tmp_path):
 def test_a_persons_slant_is_found_and_put_on_the_letters_written_from_the_writers():
     """A person who writes writer 1's letters sheared: the match is writer 1, its map is the
     shear, and the letters written from writer 1's carry it."""
-    from prg.pipeline.hands import apply_transform, fit_transform
+    from prg.pipeline.hands import STYLE_WRITERS, apply_transform, fit_transform, hand_distances
 
     bank = stand_in_hands(n_writers=3, seed=2)
     shear = np.array([[1.0, 0.25], [0.0, 1.0]])
     mine = np.flatnonzero(bank.writer == 1)[:6]
     own = apply_transform(bank.traj[mine].reshape(6, 100, 2), shear).reshape(6, -1)
     hand = match_hand(bank, own, bank.label[mine])
-    assert hand.writer == 1
-    # the map is the shear up to the normalisation's scale, and pulled a little to identity
-    direction = hand.transform / np.abs(hand.transform).max()
+    assert hand.writer == 1 and hand.blend[0] == 1
+    # writer 1's map is the shear up to the normalisation's scale, pulled a little to identity
+    distances, maps = hand_distances(bank, own, bank.label[mine])
+    direction = maps[1] / np.abs(maps[1]).max()
     np.testing.assert_allclose(direction, shear / np.abs(shear).max(), atol=0.05)
     np.testing.assert_allclose(fit_transform(own, own), np.eye(2), atol=1e-12)
+    # the hand blends the nearest writers, nearest first, with the mean of their maps
+    assert len(hand.blend) == min(STYLE_WRITERS, 3)
+    assert list(hand.blend) == list(np.argsort(distances, kind="stable")[: len(hand.blend)])
+    np.testing.assert_allclose(hand.transform, maps[list(hand.blend)].mean(0))
