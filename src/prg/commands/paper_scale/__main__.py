@@ -2,4 +2,5 @@
 
 from prg.commands.paper_scale.command import main
 
-main()
+if __name__ == "__main__":  # importing the module (the API reference does) runs nothing
+    main()
