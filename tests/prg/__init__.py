@@ -1,0 +1,1 @@
+"""Tests of ``prg``, one file per module: ``test_<module>.py``."""

@@ -1,0 +1,1 @@
+"""Tests of ``prg.commands``, one file per module: ``test_<module>.py``."""

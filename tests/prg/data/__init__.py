@@ -1,0 +1,1 @@
+"""Tests of ``prg.data``, one file per module: ``test_<module>.py``."""

@@ -1,0 +1,1 @@
+"""Tests of ``prg.evaluation``, one file per module: ``test_<module>.py``."""

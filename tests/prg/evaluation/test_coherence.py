@@ -1,0 +1,27 @@
+"""`prg-evaluate`: Table I, coherence and robustness reports from real (tiny) trained models,
+written atomically, logged to a real SQLite MLflow store; bad input gets one line."""
+
+import numpy as np
+import pytest
+import torch
+
+from prg.alphabet import ALPHABET
+from prg.evaluation.coherence import folded_correct, per_class_rate
+
+
+def test_per_class_rate_matches_a_direct_count():
+    rng = np.random.default_rng(0)
+    labels = rng.integers(0, 5, 200)
+    correct = rng.random(200) < 0.3
+    rates = per_class_rate(torch.from_numpy(correct), torch.from_numpy(labels), 7).numpy()
+    for c in range(5):
+        assert rates[c] == pytest.approx(correct[labels == c].mean())
+    assert np.isnan(rates[5:]).all()
+
+
+def test_folded_counts_a_shape_twin_as_right_and_nothing_else():
+    pairs = [("o", "O", True), ("o", "0", True), ("l", "I", True), ("x", "X", True)]
+    pairs += [("o", "a", False), ("1", "l", False), ("h", "k", False), ("b", "b", True)]
+    predicted = torch.tensor([ALPHABET.index(p) for _, p, _ in pairs])
+    labels = torch.tensor([ALPHABET.index(t) for t, _, _ in pairs])
+    assert folded_correct(predicted, labels).tolist() == [ok for *_, ok in pairs]

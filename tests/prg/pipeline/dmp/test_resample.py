@@ -1,0 +1,45 @@
+"""Discrete DMP (prg.pipeline.dmp): reproduction, generalisation, exactness of the rollout, fit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from prg.errors import UsageError
+from prg.pipeline.dmp import (
+    fit_dmp,
+    rollout,
+    uniform_in_time,
+)
+from tests.helpers.dmp import rmse
+
+# ----------------------------------------------------------------------------- irregular times
+
+
+def test_uniform_in_time_resamples_an_irregular_demonstration_for_the_fit():
+    rng = np.random.default_rng(3)
+    times = np.sort(rng.uniform(0.0, 2.0, 400))
+    times = np.concatenate([[0.0], times, [2.0]])
+    times[50] = times[49]  # two events in the same millisecond
+
+    def path(t):
+        return np.column_stack([4.0 * t + 0.6 * np.sin(3 * np.pi * t), 1.0 - np.cos(3 * np.pi * t)])
+
+    uniform, duration = uniform_in_time(path(times), times, n_samples=500)
+    assert duration == 2.0 and uniform.shape == (500, 2)
+    assert rmse(uniform, path(np.linspace(0.0, 2.0, 500))) < 1e-3
+    out = rollout(fit_dmp(uniform, tau=duration, n_basis=100, velocities="demonstrated"))
+    assert rmse(out, path(np.linspace(0.0, 2.0, 500))) < 2e-3
+
+
+@pytest.mark.parametrize(
+    ("times", "message"),
+    [
+        ([0.0, 2.0, 1.0, 3.0], "times: expected non-decreasing values"),
+        ([0.0, 0.0, 1.0, 1.0], "times: expected at least 3 distinct times"),
+        ([0.0, 1.0, 2.0], r"times: expected shape \(4,\) like points"),
+    ],
+)
+def test_uniform_in_time_refuses_times_it_cannot_resample(times, message):
+    with pytest.raises(UsageError, match=message):
+        uniform_in_time(np.zeros((4, 2)), times)

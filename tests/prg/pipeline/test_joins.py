@@ -1,0 +1,115 @@
+"""Connections that join letters as a hand does: what a connection may and may not do."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from prg.pipeline.connect import ConnectionSettings, connect_letters
+from prg.pipeline.joins import hand_connection, ink_crossings
+from tests.helpers.joins import _arc
+
+DELTA = ConnectionSettings().delta
+
+
+def _path(prev, result, nxt):
+    return np.concatenate([prev[-1:], result.points, nxt[:1]])
+
+
+def test_crossings_count_ink_cut_away_from_the_ends_only():
+    stem = np.array([[1.0, -1.0], [1.0, 1.0]])
+    through = np.array([[0.0, 0.0], [2.0, 0.0]])
+    assert ink_crossings(through, [stem]) == 1
+    assert ink_crossings(through, [stem, stem + np.array([0.5, 0.0])]) == 2
+    # a stroke that leaves a letter's ink where it starts is not cutting it
+    leaving = np.array([[1.0, 0.0], [2.0, 0.0]])
+    assert ink_crossings(leaving, [np.array([[0.95, -1.0], [1.05, 1.0]])]) == 0
+    # touching is not crossing
+    assert (
+        ink_crossings(np.array([[0.0, 0.0], [1.0, 0.0]]), [np.array([[1.0, 0.0], [1.0, 1.0]])]) == 0
+    )
+
+
+def test_a_connection_that_crosses_no_ink_is_algorithm_1s():
+    prev = _arc((0.0, 0.25), (0.25, 0.25), 180, 360 + 0)  # ends at its right, on the baseline
+    nxt = _arc((1.0, 0.25), (0.25, 0.25), 180, 540)  # starts at its left
+    alg1 = connect_letters(prev, nxt, **ConnectionSettings().as_kwargs())
+    assert ink_crossings(_path(prev, alg1, nxt), [prev, nxt]) == 0
+    mine = hand_connection(prev, nxt, [prev, nxt])
+    np.testing.assert_array_equal(mine.points, alg1.points)
+
+
+def test_an_o_entered_at_its_top_is_not_cut_through():
+    """Algorithm 1 climbs from the baseline through the o to its top; the hand's stroke does
+    not cross it."""
+    prev = np.column_stack([np.linspace(-0.6, -0.1, 30), np.zeros(30)])  # ends on the baseline
+    o = _arc((0.4, 0.25), (0.3, 0.25), 80, 80 + 360)  # starts near its top, counter-clockwise
+    alg1 = connect_letters(prev, o, **ConnectionSettings().as_kwargs())
+    mine = hand_connection(prev, o, [prev, o])
+    assert ink_crossings(_path(prev, mine, o), [prev, o]) == 0
+    assert ink_crossings(_path(prev, alg1, o), [prev, o]) >= ink_crossings(
+        _path(prev, mine, o), [prev, o]
+    )
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    gap=st.floats(0.05, 0.8),
+    rise=st.floats(-0.4, 0.6),
+    exit_deg=st.floats(-180, 180),
+    entry_deg=st.floats(-180, 180),
+    size=st.floats(0.2, 0.5),
+    turn=st.sampled_from([-300, 300]),
+)
+def test_a_connection_may_bend_but_never_leaves_a_gap_nor_cuts_more_than_algorithm_1(
+    gap, rise, exit_deg, entry_deg, size, turn
+):
+    """Any two round letters side by side: the connection starts where the first ends, ends
+    where the second starts, leaves no gap wider than delta, and crosses no more ink than the
+    paper's Algorithm 1 would."""
+    prev = _arc((0.0, size), (size, size), exit_deg - turn, exit_deg)
+    nxt = _arc((2 * size + gap, size + rise), (size, size), entry_deg, entry_deg + turn)
+    result = hand_connection(prev, nxt, [prev, nxt])
+    path = _path(prev, result, nxt)
+    steps = np.linalg.norm(np.diff(path, axis=0), axis=1)
+    assert steps.max() <= DELTA * (1 + 1e-9)
+    alg1 = connect_letters(prev, nxt, **ConnectionSettings().as_kwargs())
+    assert ink_crossings(path, [prev, nxt]) <= ink_crossings(_path(prev, alg1, nxt), [prev, nxt])
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    gap=st.floats(0.1, 0.8),
+    rise=st.floats(-0.2, 0.2),
+    exit_deg=st.floats(-80, -5),
+    entry_deg=st.floats(185, 250),
+    size=st.floats(0.2, 0.5),
+)
+def test_letters_that_face_each_other_are_joined_without_cutting_either(
+    gap, rise, exit_deg, entry_deg, size
+):
+    """The first letter ends on its right side heading right (drawn counter-clockwise to a
+    point below its middle), the second starts on its lower left heading down or right, on
+    about one line: the connection crosses neither. Not claimed: a next letter entered at its
+    top heading left between two letters a tenth of their size apart (the stroke would have to
+    thread the gap; hypothesis finds such cases), where the connection only crosses no more
+    than Algorithm 1's (the test above)."""
+    prev = _arc((0.0, size), (size, size), exit_deg - 300, exit_deg)
+    nxt = _arc((2 * size + gap, size + rise), (size, size), entry_deg, entry_deg + 300)
+    result = hand_connection(prev, nxt, [prev, nxt])
+    assert ink_crossings(_path(prev, result, nxt), [prev, nxt]) == 0
+
+
+def test_the_turn_into_the_next_letter_follows_its_first_stroke():
+    """A candidate curve enters the next letter along its first step (no kink at the join)."""
+    prev = np.column_stack([np.linspace(-0.6, 0.0, 30), np.zeros(30)])
+    wall = np.array([[0.3, -0.5], [0.3, 1.0]])  # ink between the letters: Algorithm 1 cuts it
+    nxt = np.column_stack([np.full(30, 0.9), np.linspace(0.8, 0.0, 30)])  # a stem, top down
+    result = hand_connection(prev, nxt, [prev, wall, nxt])
+    assert result.steered == 0  # not Algorithm 1's: it crossed the wall
+    last = nxt[0] - result.points[-1]
+    heading = math.degrees(math.atan2(last[1], last[0]))
+    assert -150 < heading < -30  # coming down into the stem

@@ -1,0 +1,61 @@
+"""Generate: per-letter decoding, input subsets per family, rest-to-rest timing, one DMP a word."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from prg.evaluation.kinematics import (
+    power_law,
+)
+from prg.pipeline.timing import human_samples, min_jerk, rest_to_rest_samples, speed_and_curvature
+from tests.helpers.kinematics import DT, _ellipse
+
+
+def test_rest_to_rest_timing_keeps_the_path_and_the_mean_speed():
+    t = np.linspace(0, 4 * np.pi, 400)
+    path = np.stack([t, np.sin(3 * t)], axis=1)
+    length = np.linalg.norm(np.diff(path, axis=0), axis=1).sum()
+    samples, duration = rest_to_rest_samples(path, speed_cm_s=2.0, ramp_s=0.3, samples_per_s=200)
+    assert duration == pytest.approx(length / 2.0)
+    np.testing.assert_allclose(samples[[0, -1]], path[[0, -1]], atol=1e-9)
+    speed = np.linalg.norm(np.diff(samples, axis=0), axis=1) * 200
+    assert speed[0] < 0.05 * speed.max() and speed[-1] < 0.05 * speed.max()  # starts, ends at rest
+    # every sample lies on the path (within the chord error of its polyline)
+    nearest = np.min(np.linalg.norm(samples[:, None] - path[None], axis=2), axis=1)
+    assert nearest.max() < 0.05
+
+
+def test_a_hand_slows_in_curves_and_takes_the_constant_speed_time():
+    path = _ellipse()
+    samples, duration = human_samples(path, 2.0, 0.3, 1 / DT, variation=0.0)
+    steady, steady_duration = rest_to_rest_samples(path, 2.0, 0.3, 1 / DT)
+    assert duration == pytest.approx(steady_duration)
+    assert samples.shape == steady.shape
+    np.testing.assert_allclose(samples[[0, -1]], path[[0, -1]], atol=1e-9)
+    speed, kappa = speed_and_curvature(samples, DT)
+    middle = slice(50, -50)  # away from the rest-to-rest ramps
+    tight = kappa[middle] > np.percentile(kappa[middle], 80)
+    loose = kappa[middle] < np.percentile(kappa[middle], 20)
+    assert speed[middle][tight].mean() < 0.8 * speed[middle][loose].mean()
+    assert 0.2 < power_law(samples, DT)["beta"] < 0.45
+    assert speed[0] < 0.1 * speed.max() and speed[-1] < 0.1 * speed.max()  # from rest to rest
+
+
+def test_every_sample_lies_on_the_path():
+    path = _ellipse(turns=1, n=400)
+    samples, _ = human_samples(path, 2.0, 0.3, 1 / DT, seed=3)
+    nearest = np.min(np.linalg.norm(samples[:, None] - path[None], axis=2), axis=1)
+    assert nearest.max() < 0.02
+
+
+def test_a_path_shorter_than_the_smoothing_is_timed_without_overflow():
+    samples, duration = human_samples(np.array([[0.0, 0.0], [0.0, 0.2]]), 2.0, 0.3, 100)
+    assert np.isfinite(samples).all() and duration == pytest.approx(0.1)
+
+
+def test_min_jerk_rests_at_both_ends():
+    s = min_jerk(101)
+    assert s[0] == 0 and s[-1] == 1 and np.all(np.diff(s) >= 0)
+    v = np.diff(s)
+    assert v[0] < 1e-4 and v[-1] < 1e-4

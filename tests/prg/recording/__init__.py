@@ -1,0 +1,1 @@
+"""Tests of ``prg.recording``, one file per module: ``test_<module>.py``."""

@@ -1,0 +1,1 @@
+"""Tests of ``prg.tracking``, one file per module: ``test_<module>.py``."""

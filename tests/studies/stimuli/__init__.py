@@ -1,0 +1,1 @@
+"""Tests of ``studies.stimuli``, one file per module: ``test_<module>.py``."""
