@@ -2,7 +2,7 @@
 
 Both sides fit one DMP to the same word-like trajectory (a cursive-like curve 20 cm wide, 4 cm
 tall, 12 loops per 1000 points, sampled uniformly in time over ``tau = 1`` with a minimum-jerk
-time course, so it starts and ends at rest, the same curve as ``tests/test_dmp.py``) and roll
+time course, so it starts and ends at rest, the same curve as ``tests/prg/pipeline/test_dmp.py``) and roll
 it out on the demonstration's time grid, side by side in this run:
 
 - ours: ``fit_dmp(points, tau=1, n_basis=N)`` (fourth-order differences, one banded ridge solve,
@@ -56,7 +56,7 @@ TARGET = 10.0
 
 
 def word_like(n: int, loops: int, width: float = 20.0, height: float = 4.0) -> np.ndarray:
-    """The test curve of ``tests/test_dmp.py``: ``loops`` loops, ``width`` x ``height`` cm."""
+    """The test curve of ``tests/prg/pipeline/test_dmp.py``: ``loops`` loops, ``width`` x ``height`` cm."""
     t = np.linspace(0.0, 1.0, n)
     s = 10 * t**3 - 15 * t**4 + 6 * t**5
     angle = 2 * np.pi * loops * s

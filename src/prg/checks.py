@@ -5,7 +5,7 @@ nothing else, so ``generate.temperature=nan`` or ``data.splits.val=0`` would rea
 arithmetic. :data:`RANGES` maps each numeric option (dotted key; ``*`` matches one level) to the
 values it accepts, and :func:`check_values`, called first by every command's task, refuses a
 value outside them with one line naming the option and what is accepted. NaN and infinity are
-refused everywhere. ``tests/test_bad_inputs.py`` checks that every numeric option of the composed
+refused everywhere. ``tests/cli/test_bad_inputs.py`` checks that every numeric option of the composed
 configs has an entry here, so a new option cannot skip the check.
 
 :data:`CHOICES` holds the options that name one of a fixed set (``family``: :data:`FAMILIES`),

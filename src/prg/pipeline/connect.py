@@ -59,7 +59,7 @@ would skip the letter's first ``j`` points. Two honest repairs are offered (``jo
   ``1``, subdivided at ``delta``) to its first point, from which the letter is written whole.
   The ink of the return lies on the letter itself, but the pen reverses at point ``j``.
 
-Guarantees (tested in ``tests/test_connect.py``)
+Guarantees (tested in ``tests/prg/pipeline/test_connect.py``)
 ------------------------------------------------
 With ``P = [prev[-1], *result.points, nxt[0]]``:
 

@@ -30,7 +30,7 @@ One module per family of tests, all names importable from here:
 - :mod:`~studies.analysis.stats.mixed` — the crossed mixed logit;
 - :mod:`~studies.analysis.stats.reliability` — ICC(1) and the design effect.
 
-The tests in ``tests/test_study_analysis*.py`` check each function against the scipy or
+The tests in ``tests/studies/analysis/`` check each function against the scipy or
 statsmodels call its docstring names.
 """
 

@@ -37,7 +37,7 @@ moved goal is met within 2.5 % of the move at ``t = tau`` and exactly as ``t -> 
 Defaults: ``K = 156.25``, ``D = 2 sqrt(K) = 25`` (critical damping; the paper's ``alpha_z = 25``,
 ``beta_z = alpha_z / 4``) and ``alpha_x = ln 100``.
 
-Accuracy (``tests/test_dmp.py``): with the defaults a 1000-point word-like curve 20 cm wide and
+Accuracy (``tests/prg/pipeline/test_dmp.py``): with the defaults a 1000-point word-like curve 20 cm wide and
 4 cm tall that starts and ends at rest (twelve loops of varying height) is reproduced with an RMSE
 of about 1e-4 mm; the fourth-order differences and the cubic hold matter (second-order differences
 with a linear hold leave about 0.06 mm).

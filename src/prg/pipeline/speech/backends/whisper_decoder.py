@@ -17,7 +17,7 @@ stored there in float16; CTranslate2 quantises it to int8 at load time) by
 :func:`read_model_bin`, which only unpacks numbers: nothing in the file is executed. The linear
 maps run in bfloat16 (half the memory traffic of float32), layer norms and the residual stream
 in float32. The token log-probabilities agree with CTranslate2's int8 decoder to within 0.3
-nats (``tests/test_speech.py``); a float32 projection onto the vocabulary changed them by at
+nats (``tests/prg/pipeline/speech/backends/test_whisper.py``); a float32 projection onto the vocabulary changed them by at
 most 0.03 on four words, and rescoring got as many words right as with CTranslate2's decoder
 on bench_speech's 96 hard utterances and on two held-out sets (240 more).
 """
