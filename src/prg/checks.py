@@ -8,6 +8,15 @@ value outside them with one line naming the option and what is accepted. NaN and
 refused everywhere. ``tests/cli/test_bad_inputs.py`` checks that every numeric option of the composed
 configs has an entry here, so a new option cannot skip the check.
 
+Each range is written once. An option read into a settings dataclass takes its range from the
+field's declaration (:func:`prg.fields.ranged`): :data:`DECLARED` names the config node and its
+class (``generate``: ``prg.pipeline.settings.GenerateSettings``), and :data:`RANGES` is built on
+first use from those classes' declared fields (``generate.seed`` ...) and :data:`TABLE`, the
+options with no declaring settings class behind them (data, model, trainer ...; and, until
+their classes declare their fields, those checked with the ``*_RANGES`` tables below through
+:func:`prg.fields.check_ranges`). The declaring settings modules import no numpy, so the check
+still runs before any heavy library is loaded.
+
 :data:`CHOICES` holds the options that name one of a fixed set (``family``: :data:`FAMILIES`),
 checked by :func:`check_values` too, and :func:`unknown_key` is the line for an option the
 config does not have (with the closest keys and the keys accepted there). The command runner
@@ -23,6 +32,8 @@ from __future__ import annotations
 
 import difflib
 import fnmatch
+import functools
+import importlib
 import math
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
@@ -105,27 +116,7 @@ WEIGHT_MAX = 1e6  # loss and cost weights
 TEMPERATURE_MAX = 10.0  # latents drawn with their std times this: 1 is the model's own spread
 TEMPERATURE = non_negative(TEMPERATURE_MAX)
 
-# ---- the fields of library settings classes (each validates itself with its own table) ----
-GENERATE_RANGES: dict[str, Range] = {  # prg.pipeline.compose.GenerateSettings
-    "hand_temperature": TEMPERATURE,
-    "hand_seed": count(0, SEED_MAX, optional=True),
-    "temperature": TEMPERATURE,
-    "seed": SEED,
-    "impute_steps": count(0, 1000),
-    "speed_variation": non_negative(2),
-    "speed_cm_s": positive(1000),
-    "ramp_s": non_negative(60),
-    "samples_per_s": positive(10_000),
-    "basis_per_100_samples": count(1, 100),
-}
-
-MARK_RANGES: dict[str, Range] = {  # prg.pipeline.marks.MarkSettings (fractions of H)
-    "dot_gap": positive(0.6),  # 0 would put the dot on the stem; more floats away from it
-    "dot_radius": positive(1),
-    "bar_width": positive(3),
-    "bar_height": positive(3),
-}
-
+# ---- the fields of library settings classes that take their ranges from a table here ----
 LIKELIHOOD_RANGES: dict[str, Range] = {  # prg.evaluation.settings.LikelihoodSettings
     "k_marginal": count(1, 1_000_000),
     "k_conditional": count(1, 1_000_000),
@@ -190,10 +181,14 @@ def _under(prefix: str, ranges: dict[str, Range]) -> dict[str, Range]:
     return {f"{prefix}.{name}": spec for name, spec in ranges.items()}
 
 
-# ---- every numeric option of conf/ (prepare, train, evaluate, write, dictaphone, simulate) ----
-RANGES: dict[str, Range] = {
-    **_under("generate", GENERATE_RANGES),
-    **_under("marks", MARK_RANGES),
+# ---- the config nodes whose ranges their settings class declares (prg.fields.ranged) ----
+DECLARED: dict[str, tuple[str, str]] = {  # config node -> (module, settings class)
+    "generate": ("prg.pipeline.settings", "GenerateSettings"),
+    "marks": ("prg.pipeline.settings", "MarkSettings"),
+}
+
+# ---- every other numeric option of conf/ (prepare, train, evaluate, write, dictaphone, ...) ----
+TABLE: dict[str, Range] = {
     # data (prg-prepare; read back by prg-train and prg-evaluate)
     "data.seed": SEED,
     "data.preprocess.n_points": count(2, 4096),
@@ -353,12 +348,29 @@ CHOICES: dict[str, tuple[str, tuple[str, ...]]] = {  # key -> (what a value is, 
 }
 
 
+@functools.cache
+def _ranges() -> dict[str, Range]:
+    from prg.fields import declared_ranges
+
+    declared: dict[str, Range] = {}
+    for node, (module, name) in DECLARED.items():
+        declared |= declared_ranges(getattr(importlib.import_module(module), name), node)
+    return declared | TABLE
+
+
+def __getattr__(name: str) -> Any:
+    if name == "RANGES":  # built on first use: the settings modules import this one
+        return _ranges()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 def range_of(key: str) -> Range | None:
     """The entry of :data:`RANGES` for the dotted ``key`` (exact first, then patterns)."""
-    if key in RANGES:
-        return RANGES[key]
+    ranges = _ranges()
+    if key in ranges:
+        return ranges[key]
     depth = key.count(".")
-    for pattern, spec in RANGES.items():
+    for pattern, spec in ranges.items():
         if pattern.count(".") == depth and fnmatch.fnmatchcase(key, pattern):
             return spec
     return None

@@ -1,9 +1,20 @@
 """Checked fields of the library's settings classes; each refusal is a
 :class:`~prg.errors.SettingsError` naming the field alone.
 
-A settings dataclass checks its own values in ``__post_init__``: either with fields declared by
-:func:`checked` (the check runs, and the converted value is stored, in :func:`check_fields`) or
-with the one-field checks below (:func:`positive`, :func:`at_least`, :func:`vector` ...). An error
+A settings dataclass checks its own values in ``__post_init__`` with :func:`check_fields`, which
+checks each field as the field declares it:
+
+* :func:`ranged` declares the numbers a field accepts, a :class:`prg.checks.Range`, once: the
+  dataclass refuses a value outside it (``impute_steps must be an integer in [0, 1000], got
+  -1``) and :data:`prg.checks.RANGES` takes the config option's entry from the same declaration
+  (:func:`declared_ranges`; ``generate.impute_steps``), so the settings class and the config
+  check cannot drift apart;
+* :func:`checked` declares a check-and-convert function (the converted value is stored).
+
+Classes not yet declaring their fields use the one-field checks below (:func:`positive`,
+:func:`at_least`, :func:`vector` ...) or :func:`check_ranges` with a table of
+:mod:`prg.checks`. This module imports no numpy, so that the settings classes that declare their
+ranges can be read by the config check before any heavy library is loaded. An error
 names the field as the dataclass spells it (``lift_cm must be a positive number, got 0``); whoever
 read the value from a config tree adds its path with :meth:`~prg.errors.SettingsError.under`
 (``motion.lift_cm ...``). :class:`FromMapping` gives a settings dataclass ``from_mapping``: its
@@ -15,12 +26,14 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import numbers
 from collections.abc import Callable, Mapping
-from typing import Any, TypeVar
-
-import numpy as np
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from prg.errors import SettingsError, UsageError
+
+if TYPE_CHECKING:
+    from prg.checks import Range
 
 __all__ = [
     "FromMapping",
@@ -30,12 +43,14 @@ __all__ = [
     "check_fields",
     "check_ranges",
     "checked",
+    "declared_ranges",
     "integer",
     "listed_as_tuple",
     "number",
     "positive",
     "positive_float",
     "positive_integer",
+    "ranged",
     "vector",
 ]
 
@@ -44,14 +59,14 @@ _Settings = TypeVar("_Settings", bound="FromMapping")
 
 def integer(value: Any, field: str, minimum: int = 1) -> int:
     """``value`` as an ``int`` when it is an integer (not a bool) of at least ``minimum``."""
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
         raise SettingsError(field, f"must be an integer >= {minimum}, got {value!r}")
     return int(value)
 
 
 def number(value: Any, field: str, minimum: float | None = None, *, strict: bool = False) -> float:
     """``value`` as a finite ``float``, at least ``minimum`` (above it when ``strict``)."""
-    if isinstance(value, bool) or not isinstance(value, int | float | np.number):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise SettingsError(field, f"must be a number, got {value!r}")
     value = float(value)
     if minimum is None:
@@ -72,14 +87,56 @@ def checked(default: Any, check: Callable[..., Any], **options: Any) -> Any:
     )
 
 
+def ranged(default: Any, spec: Range) -> Any:
+    """A dataclass field with ``default`` that accepts the numbers of ``spec`` (a
+    :class:`prg.checks.Range`): :func:`check_fields` refuses any other value, and
+    :func:`declared_ranges` gives ``spec`` to the config check (:data:`prg.checks.RANGES`).
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass
+    >>> from prg.checks import count
+    >>> @dataclass(frozen=True)
+    ... class Steps:
+    ...     steps: int = ranged(20, count(0, 1000))
+    ...
+    ...     def __post_init__(self) -> None:
+    ...         check_fields(self)
+    >>> Steps(-1)
+    Traceback (most recent call last):
+    prg.errors.SettingsError: steps must be an integer in [0, 1000], got -1
+    >>> declared_ranges(Steps, "walk") == {"walk.steps": count(0, 1000)}
+    True
+    """
+    return dataclasses.field(default=default, metadata={"range": spec})
+
+
 def check_fields(settings: Any) -> None:
-    """Check the :func:`checked` fields of a (frozen) dataclass instance, in declaration order,
-    and store the converted values."""
+    """Check the declared fields of a (frozen) dataclass instance, in declaration order: a
+    :func:`checked` field's value is checked and its converted value stored, a :func:`ranged`
+    field's value must lie in its range (the first refused raises
+    :class:`~prg.errors.SettingsError` naming the field)."""
+    from prg.checks import require_number
+
     for field in dataclasses.fields(settings):
         check = field.metadata.get("check")
         if check is not None:
             value = check(getattr(settings, field.name), field.name)
             object.__setattr__(settings, field.name, value)
+        spec = field.metadata.get("range")
+        if spec is not None:
+            require_number(getattr(settings, field.name), field.name, spec)
+
+
+def declared_ranges(settings_class: type, prefix: str = "") -> dict[str, Range]:
+    """The :func:`ranged` fields of a settings dataclass, field name to range, each name after
+    ``prefix`` and a dot when a prefix is given (the config node that holds the fields)."""
+    start = f"{prefix}." if prefix else ""
+    return {
+        f"{start}{field.name}": field.metadata["range"]
+        for field in dataclasses.fields(settings_class)
+        if "range" in field.metadata
+    }
 
 
 def check(ok: bool, field: str, problem: str) -> None:
@@ -91,7 +148,7 @@ def check(ok: bool, field: str, problem: str) -> None:
 def as_float(value: Any, field: str) -> float:
     """``value`` as a float, not yet checked to be finite; a bool, a string or anything else not
     a number is refused."""
-    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise SettingsError(field, f"must be a number, got {value!r}")
     return float(value)
 
@@ -129,6 +186,8 @@ def positive_integer(owner: Any, *fields: str) -> None:
 
 def vector(value: Any, field: str, size: int, problem: str) -> tuple[float, ...]:
     """``value`` as a tuple of ``size`` finite floats (else: ``PROBLEM, got ...``)."""
+    import numpy as np  # not at the top: the config check imports this module
+
     try:
         arr = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):

@@ -25,65 +25,13 @@ The paper's single stroke is ``GenerateSettings.delayed_strokes=False``. How the
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from prg.alphabet import unsupported_chars
-from prg.checks import MARK_RANGES
-from prg.errors import SettingsError
-from prg.fields import check_ranges
 from prg.pipeline.layout import LayoutSettings, letter_band
+from prg.pipeline.settings import MarkSettings
 
 DOT_POINTS = 13  # a closed circle: 12 chords (under 0.01 mm from the true circle)
 BAR_STEP_CM = 0.05  # the bar's points are this far apart (as the connection strokes' delta)
-
-
-@dataclass(frozen=True)
-class MarkSettings:
-    """Which letters get a delayed stroke and its size (fractions of the letter height ``H``).
-
-    Attributes
-    ----------
-    dotted
-        letters that get a dot above the stem (``"ij"``).
-    crossed
-        letters that get a bar across the stem (``"tf"``).
-    dot_gap
-        space between the stem's top and the dot (0.2 H: 0.4 of the x-height).
-    dot_radius
-        the dot's radius (0.015 H: 0.22 mm for a 1.5 cm letter; a circle that small
-        under a 0.4 mm pen inks a filled dot, not a ring).
-    bar_width
-        length of a bar (0.4 H).
-    bar_height
-        height of a bar as a fraction of the x-height (1.0: on the x-height line).
-    """
-
-    dotted: str = "ij"
-    crossed: str = "tf"
-    dot_gap: float = 0.2
-    dot_radius: float = 0.015
-    bar_width: float = 0.4
-    bar_height: float = 1.0
-
-    def __post_init__(self) -> None:
-        check_ranges(self, MARK_RANGES)
-        for name in ("dotted", "crossed"):
-            value = getattr(self, name)
-            if not isinstance(value, str) or unsupported_chars(value) or " " in value:
-                raise SettingsError(name, f"{value!r}: give letters from 0-9, A-Z, a-z")
-        both = sorted(set(self.dotted) & set(self.crossed))
-        if both:
-            raise SettingsError("crossed", f"{both[0]!r} is also dotted: one mark per letter")
-
-    def mark_of(self, char: str) -> str | None:
-        """``"dot"``, ``"bar"`` or None for a character."""
-        if char in self.dotted:
-            return "dot"
-        if char in self.crossed:
-            return "bar"
-        return None
 
 
 MIN_SCALE = 0.25  # marks of a letter the width guard flattened keep a quarter of their size

@@ -41,6 +41,7 @@ from prg.errors import UsageError
 from prg.files import atomic_path
 from prg.pipeline.connect import ConnectionResult
 from prg.pipeline.layout import word_breaks
+from prg.pipeline.settings import DEFAULT_SPEED_CM_S
 from prg.plotting import CONNECTION, FIGURE_INK, MARK, PAPER, SPACE, hex_colour
 
 if TYPE_CHECKING:  # the DMP module (scipy) is imported when a word has a DMP
@@ -52,7 +53,6 @@ READ_VERSIONS = (1, 2)
 SEGMENT_KINDS = ("letter", "connection", "space", "lift", "mark")
 PEN_UP_KINDS = ("space", "lift")
 DELAYED_KINDS = ("lift", "mark")
-DEFAULT_SPEED_CM_S = 2.0
 
 # How each kind is drawn when highlighting: (colour, width as a fraction of the pen width, dashes)
 _STYLES = {

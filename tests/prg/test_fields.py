@@ -1,0 +1,107 @@
+"""One declaration of a field's accepted values (prg.fields.ranged): the settings dataclass
+refuses a value outside it, and the config check (prg.checks.RANGES) refuses the same value of
+the option with the range taken from the same declaration."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+import subprocess
+import sys
+
+import pytest
+
+from prg.checks import DECLARED, RANGES, TABLE, Range, check_values, count, range_of
+from prg.errors import SettingsError, UsageError
+from prg.fields import check_fields, declared_ranges, ranged
+from prg.pipeline.settings import GenerateSettings, MarkSettings
+
+SETTINGS = {"generate": GenerateSettings, "marks": MarkSettings}
+
+
+@dataclasses.dataclass(frozen=True)
+class _Walk:
+    steps: int = ranged(20, count(0, 1000))
+    pace: float = ranged(1.0, Range(0, 10, low_open=True, optional=True))
+    name: str = "walk"
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+
+
+def test_a_declared_range_is_enforced_by_the_dataclass_naming_the_field():
+    assert _Walk().steps == 20 and _Walk(pace=None).pace is None
+    with pytest.raises(SettingsError, match=r"^steps must be an integer in \[0, 1000\], got -1$"):
+        _Walk(steps=-1)
+    with pytest.raises(SettingsError, match=r"^pace must be a finite number in \(0, 10\] or null"):
+        _Walk(pace=float("nan"))
+
+
+def test_declared_ranges_are_the_ranged_fields_under_their_node():
+    pace = Range(0, 10, low_open=True, optional=True)
+    assert declared_ranges(_Walk) == {"steps": count(0, 1000), "pace": pace}
+    assert set(declared_ranges(_Walk, "walk")) == {"walk.steps", "walk.pace"}
+
+
+def test_the_declared_nodes_are_the_settings_classes():
+    assert {node: getattr(sys.modules[m], c) for node, (m, c) in DECLARED.items()} == SETTINGS
+
+
+@pytest.mark.parametrize("node", sorted(SETTINGS))
+def test_the_config_check_takes_its_ranges_from_the_declarations(node):
+    declared = declared_ranges(SETTINGS[node], node)
+    assert declared and all(RANGES[key] is spec for key, spec in declared.items())
+    assert not any(key.startswith(f"{node}.") for key in TABLE)  # written once, not twice
+
+
+@pytest.mark.parametrize(
+    "node, field, value",
+    [
+        ("generate", "impute_steps", -1),
+        ("generate", "temperature", 11.0),
+        ("generate", "hand_seed", 1.5),
+        ("generate", "speed_cm_s", 0),
+        ("marks", "dot_gap", 0.7),
+        ("marks", "bar_height", float("inf")),
+    ],
+)
+def test_one_range_refuses_a_value_in_the_dataclass_and_in_the_config(node, field, value):
+    with pytest.raises(SettingsError) as in_class:
+        SETTINGS[node](**{field: value})
+    with pytest.raises(UsageError) as in_config:
+        check_values({node: {field: value}})
+    assert str(in_class.value.under(node)) == str(in_config.value)
+    assert str(in_config.value).startswith(f"{node}.{field} must be ")
+
+
+def _numeric(annotation: str) -> bool:
+    """A field annotated (as text: ``from __future__ import annotations``) int or float."""
+    return bool(re.search(r"\b(int|float)\b", annotation))
+
+
+@pytest.mark.parametrize("node", sorted(SETTINGS))
+def test_every_numeric_field_of_a_declaring_class_declares_its_range(node):
+    cls = SETTINGS[node]
+    numeric = {f.name for f in dataclasses.fields(cls) if _numeric(str(f.type))}
+    assert numeric and numeric == set(declared_ranges(cls))
+
+
+def test_a_numeric_field_without_a_declaration_is_caught():
+    @dataclasses.dataclass(frozen=True)
+    class Careless:
+        steps: int = ranged(20, count(0, 1000))
+        pace: float = 1.0  # no range: the test above names it
+
+    numeric = {f.name for f in dataclasses.fields(Careless) if _numeric(str(f.type))}
+    assert numeric - set(declared_ranges(Careless)) == {"pace"}
+    # ... and the config check has no range for its option
+    assert range_of("walk.pace") is None
+
+
+def test_reading_the_declared_ranges_imports_no_numpy():
+    code = (
+        "import sys; from prg.checks import range_of; "
+        "assert range_of('generate.seed') is not None; print('numpy' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
