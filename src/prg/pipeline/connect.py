@@ -60,7 +60,7 @@ would skip the letter's first ``j`` points. Two honest repairs are offered (``jo
   The ink of the return lies on the letter itself, but the pen reverses at point ``j``.
 
 Guarantees (tested in ``tests/prg/pipeline/test_connect.py``)
-------------------------------------------------
+-------------------------------------------------------------
 With ``P = [prev[-1], *result.points, nxt[0]]``:
 
 1. **Termination**: at most ``max_steps`` steered steps. If the target is not reached by then
