@@ -92,7 +92,6 @@ UNMIRRORED = {
     "prg.evaluation.dictaphone": "Table II; run through prg-dictaphone in tests/cli/test_dictaphone.py",
     "prg.evaluation.figures": "evaluation figures, drawn by prg.evaluation.run in tests/cli/test_evaluate.py",
     "prg.export.ros": "the ROS format, written by prg.export.run in tests/prg/export/test_run.py",
-    "prg.fields": "shared field definitions, exercised through the modules that use them",
     "prg.pipeline.dmp.canonical": "tested with its package in tests/prg/pipeline/test_dmp.py",
     "prg.pipeline.dmp.model": "tested with its package in tests/prg/pipeline/test_dmp.py",
     "prg.pipeline.dmp.settings": "tested with its package in tests/prg/pipeline/test_dmp.py",
