@@ -115,6 +115,7 @@ DEGREES = Range(-360, 360)
 WEIGHT_MAX = 1e6  # loss and cost weights
 TEMPERATURE_MAX = 10.0  # latents drawn with their std times this: 1 is the model's own spread
 TEMPERATURE = non_negative(TEMPERATURE_MAX)
+ALPHA_MAX_DEG = Range(0, 180, low_open=True)  # connection.alpha_max_deg: a turn per step
 
 # ---- the fields of library settings classes that take their ranges from a table here ----
 LIKELIHOOD_RANGES: dict[str, Range] = {  # prg.evaluation.settings.LikelihoodSettings
@@ -185,6 +186,8 @@ def _under(prefix: str, ranges: dict[str, Range]) -> dict[str, Range]:
 DECLARED: dict[str, tuple[str, str]] = {  # config node -> (module, settings class)
     "generate": ("prg.pipeline.settings", "GenerateSettings"),
     "marks": ("prg.pipeline.settings", "MarkSettings"),
+    "layout": ("prg.pipeline.settings", "LayoutSettings"),
+    "connection": ("prg.pipeline.settings", "ConnectionSettings"),
 }
 
 # ---- every other numeric option of conf/ (prepare, train, evaluate, write, dictaphone, ...) ----
@@ -271,12 +274,9 @@ TABLE: dict[str, Range] = {
     "styles.ks": count(1, 61),  # letters given as the style (the other classes are scored)
     "styles.seeds": SEED,
     # prg-write (and prg-dictaphone, prg-simulate, which run it)
-    "layout.*": positive(100),  # cm, or fractions of the letter height
-    "connection.delta": positive(10),
-    "connection.alpha_max_deg": Range(0, 180, low_open=True),
-    "connection.theta_*": non_negative(WEIGHT_MAX),
-    "connection.home_radius": positive(100),
-    "connection.max_steps": count(1, 100_000),
+    # ConnectionSettings holds this turn as alpha_max, in radians: it checks it against this
+    # range, converted, and declares no range of its own for an option the config does not have
+    "connection.alpha_max_deg": ALPHA_MAX_DEG,
     "speech.max_seconds": positive(600),
     "speech.min_rms_dbfs": Range(-200, 0),
     "speech.beam_size": count(1, 64),

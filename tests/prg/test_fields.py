@@ -14,9 +14,22 @@ import pytest
 from prg.checks import DECLARED, RANGES, TABLE, Range, check_values, count, range_of
 from prg.errors import SettingsError, UsageError
 from prg.fields import check_fields, declared_ranges, ranged
-from prg.pipeline.settings import GenerateSettings, MarkSettings
+from prg.pipeline.settings import (
+    ConnectionSettings,
+    GenerateSettings,
+    LayoutSettings,
+    MarkSettings,
+)
 
-SETTINGS = {"generate": GenerateSettings, "marks": MarkSettings}
+SETTINGS = {
+    "generate": GenerateSettings,
+    "marks": MarkSettings,
+    "layout": LayoutSettings,
+    "connection": ConnectionSettings,
+}
+# fields held in another unit than their config option, whose range stays in TABLE:
+# node -> {field: option}
+CONVERTED = {"connection": {"alpha_max": "alpha_max_deg"}}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -51,7 +64,9 @@ def test_the_declared_nodes_are_the_settings_classes():
 def test_the_config_check_takes_its_ranges_from_the_declarations(node):
     declared = declared_ranges(SETTINGS[node], node)
     assert declared and all(RANGES[key] is spec for key, spec in declared.items())
-    assert not any(key.startswith(f"{node}.") for key in TABLE)  # written once, not twice
+    converted = {f"{node}.{option}" for option in CONVERTED.get(node, {}).values()}
+    in_table = {key for key in TABLE if key.startswith(f"{node}.")}
+    assert in_table == converted  # written once, not twice
 
 
 @pytest.mark.parametrize(
@@ -63,6 +78,11 @@ def test_the_config_check_takes_its_ranges_from_the_declarations(node):
         ("generate", "speed_cm_s", 0),
         ("marks", "dot_gap", 0.7),
         ("marks", "bar_height", float("inf")),
+        ("layout", "gap", 0),
+        ("layout", "letter_height", 101.0),
+        ("connection", "max_steps", 0),
+        ("connection", "home_radius", 0.0),
+        ("connection", "theta_p", -0.5),
     ],
 )
 def test_one_range_refuses_a_value_in_the_dataclass_and_in_the_config(node, field, value):
@@ -83,7 +103,14 @@ def _numeric(annotation: str) -> bool:
 def test_every_numeric_field_of_a_declaring_class_declares_its_range(node):
     cls = SETTINGS[node]
     numeric = {f.name for f in dataclasses.fields(cls) if _numeric(str(f.type))}
-    assert numeric and numeric == set(declared_ranges(cls))
+    assert numeric and numeric - set(CONVERTED.get(node, {})) == set(declared_ranges(cls))
+
+
+def test_a_converted_field_is_checked_and_its_option_has_a_range():
+    for node, fields in CONVERTED.items():
+        for name, option in fields.items():
+            assert "check" in SETTINGS[node].__dataclass_fields__[name].metadata
+            assert range_of(f"{node}.{option}") is TABLE[f"{node}.{option}"]
 
 
 def test_a_numeric_field_without_a_declaration_is_caught():

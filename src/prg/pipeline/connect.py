@@ -42,7 +42,8 @@ synthetic test split: with neither, 43 of 200 connections ran out of steps, orbi
   the four-term cost shapes the path; near it, the pen aims. Homing never switches back off.
 
 With both, no connection of the 300 needs the fallback below; ``home_radius = 0`` gives the
-unmodified candidate competition.
+unmodified candidate competition (an argument of :func:`connect_letters`; the command's
+:class:`ConnectionSettings` takes the config's range, ``home_radius > 0``).
 
 Every point of letter ``i + 1`` is still written, in order
 -----------------------------------------------------------
@@ -87,19 +88,15 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import asdict, astuple, dataclass
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 
 from prg.errors import SettingsError, UsageError
+from prg.pipeline.settings import JOIN_MODES, ConnectionSettings, JoinMode  # exported here too
 
-JoinMode = Literal["first", "retrace"]
-_JOIN_MODES = ("first", "retrace")
 _TINY = 1e-12
-
-
-_POSITIVE = ("delta", "alpha_max")  # ConnectionSettings fields checked by _check_positive
 _WEIGHTS = ("theta_o", "theta_a", "theta_f", "theta_p", "home_radius")  # by _check_weight
 
 
@@ -134,76 +131,22 @@ def _check_count(value, name: str) -> int:
     return int(value)
 
 
-@dataclass(frozen=True)
-class ConnectionSettings:
-    """Parameters of :func:`connect_letters` (lengths in centimetres, angles in radians).
-
-    Defaults are tuned for letters 0.75 cm (x-height) to 1.5 cm (full height) tall, laid out by
-    :mod:`prg.pipeline.layout` with its default gap.
-
-    Attributes
-    ----------
-    delta : float
-        Step length of the connection and the largest gap it leaves (0.05 cm, about the spacing of
-        the 100 points of a decoded letter at this size).
-    alpha_max : float
-        Largest heading change per step (18 degrees): a turning radius of
-        ``delta / (2 sin(alpha_max / 2)) = 0.16 cm``, a pen-like curvature at this letter size.
-    theta_o : float
-        Weight of the index term ``j / m`` (prefers the next letter's early points).
-    theta_a : float
-        Weight of the normalised turn (prefers going straight on: smooth exits).
-    theta_f : float
-        Weight of the normalised distance to the next letter's first point (pulls to its start).
-    theta_p : float
-        Weight of the normalised distance to the candidate's own target point (pulls towards the
-        nearest part of the next letter).
-    home_radius : float
-        Distance to the next letter's first point below which the pen aims at that point alone
-        (0.4 cm, 2.5 turning radii; module docstring). 0 disables homing.
-    max_steps : int
-        Cap on steered steps before the straight fallback (400 steps = 20 cm of path).
-    join : {"first", "retrace"}
-        How the connection enters the next letter (module docstring).
-
-    The weights were chosen on the synthetic test split (300 random lowercase pairs) and by eye
-    on rendered words: the distance-to-start term dominates (``theta_f = 4``), which gives short,
-    rounded joins (median path 1.03 times the straight distance; the p90 of the total turning of
-    a connection is about 190 degrees, i.e. at most a hook or a loop). Smaller ``theta_f`` or
-    larger ``theta_a`` make wider detours (``theta_f = 1``: p90 path 3.4 times the distance).
-
-    A refused value raises :class:`~prg.errors.SettingsError` naming its field; the lengths and
-    weights are stored as ``float``, ``max_steps`` as ``int``.
-    """
-
-    delta: float = 0.05
-    alpha_max: float = math.radians(18.0)
-    theta_o: float = 1.0
-    theta_a: float = 1.0
-    theta_f: float = 4.0
-    theta_p: float = 0.5
-    home_radius: float = 0.4
-    max_steps: int = 400
-    join: JoinMode = "first"
-
-    def __post_init__(self) -> None:
-        checked = {name: _check_positive(getattr(self, name), name) for name in _POSITIVE}
-        if checked["alpha_max"] > math.pi:
-            raise SettingsError(
-                "alpha_max", f"must be in (0, pi] radians, got {checked['alpha_max']!r}"
-            )
-        checked.update({name: _check_weight(getattr(self, name), name) for name in _WEIGHTS})
-        checked["max_steps"] = _check_count(self.max_steps, "max_steps")
-        if self.join not in _JOIN_MODES:
-            raise SettingsError(
-                "join", f"must be one of {', '.join(_JOIN_MODES)}, got {self.join!r}"
-            )
-        for name, value in checked.items():
-            object.__setattr__(self, name, value)
-
-    def as_kwargs(self) -> dict:
-        """The parameters as keyword arguments of :func:`connect_letters`."""
-        return asdict(self)
+def _check_arguments(
+    delta, alpha_max, theta_o, theta_a, theta_f, theta_p, home_radius, max_steps, join
+) -> tuple:
+    """The parameters of :func:`connect_letters` checked, lengths and weights as floats and
+    ``max_steps`` as an int. Wider than :class:`ConnectionSettings` (the config's ranges): no
+    upper bounds, ``home_radius = 0`` (no homing) and ``max_steps = 0`` (the straight joiner)."""
+    delta = _check_positive(delta, "delta")
+    alpha_max = _check_positive(alpha_max, "alpha_max")
+    if alpha_max > math.pi:
+        raise SettingsError("alpha_max", f"must be in (0, pi] radians, got {alpha_max!r}")
+    values = (theta_o, theta_a, theta_f, theta_p, home_radius)
+    weights = tuple(_check_weight(v, name) for v, name in zip(values, _WEIGHTS, strict=True))
+    max_steps = _check_count(max_steps, "max_steps")
+    if join not in JOIN_MODES:
+        raise SettingsError("join", f"must be one of {', '.join(JOIN_MODES)}, got {join!r}")
+    return (delta, alpha_max, *weights, max_steps, join)
 
 
 _DEFAULT = ConnectionSettings()
@@ -358,9 +301,8 @@ def connect_letters(
     """
     prev = _check_points(prev, "prev")
     nxt = _check_points(nxt, "nxt")
-    # checked by ConnectionSettings, as floats (max_steps an int)
-    delta, alpha_max, theta_o, theta_a, theta_f, theta_p, home_radius, max_steps, join = astuple(
-        ConnectionSettings(
+    delta, alpha_max, theta_o, theta_a, theta_f, theta_p, home_radius, max_steps, join = (
+        _check_arguments(
             delta, alpha_max, theta_o, theta_a, theta_f, theta_p, home_radius, max_steps, join
         )
     )

@@ -38,62 +38,14 @@ ignored. Boxes of consecutive letters never overlap.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
 from prg.alphabet import unsupported_chars
-from prg.errors import SettingsError, UsageError
+from prg.errors import UsageError
+from prg.pipeline.settings import LayoutSettings  # exported here too
 
 _EPS = 1e-9
-
-
-@dataclass(frozen=True)
-class LayoutSettings:
-    """Sizes of the word layout, in centimetres (ratios relative to ``letter_height``).
-
-    Attributes
-    ----------
-    letter_height : float
-        Height ``H`` of uppercase letters, digits and ascenders (1.5 cm: a robot pen's
-        comfortable size; the x-height is then 0.75 cm).
-    x_height : float
-        Height of x-height letters as a fraction of ``H`` (0.5: the paper's "half-height").
-    descender : float
-        Depth below the baseline of descender tails, as a fraction of ``H`` (0.45).
-    max_width : float
-        Widest a letter may be, as a fraction of ``H`` (1.6: wide enough for ``m``, ``w``, ``W``;
-        guards against a flat decoded letter being blown up).
-    gap : float
-        Horizontal distance between consecutive letters' bounding boxes (0.2 cm).
-    space_width : float
-        Extra horizontal distance per space between words (0.6 cm).
-    ascenders : str
-        Lowercase letters of full height.
-    descenders : str
-        Letters whose tail goes below the baseline.
-
-    A refused value raises :class:`~prg.errors.SettingsError` naming its field.
-    """
-
-    letter_height: float = 1.5
-    x_height: float = 0.5
-    descender: float = 0.45
-    max_width: float = 1.6
-    gap: float = 0.2
-    space_width: float = 0.6
-    ascenders: str = "bdfhklt"
-    descenders: str = "fgjpqy"
-
-    def __post_init__(self) -> None:
-        for name in ("letter_height", "x_height", "max_width"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
-                raise SettingsError(name, f"must be a positive number, got {value!r}")
-        for name in ("descender", "gap", "space_width"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value >= 0):
-                raise SettingsError(name, f"must be a non-negative number, got {value!r}")
 
 
 def letter_band(char: str, params: LayoutSettings | None = None) -> tuple[float, float]:

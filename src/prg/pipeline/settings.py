@@ -1,32 +1,47 @@
-"""The settings of writing a word: :class:`GenerateSettings` and its :class:`MarkSettings`.
+"""The settings of writing a word: :class:`GenerateSettings` and its :class:`MarkSettings`,
+:class:`LayoutSettings` and :class:`ConnectionSettings`.
 
 Each numeric field declares the values it accepts (:func:`prg.fields.ranged`): the dataclass
 checks them (:func:`prg.fields.check_fields`) and :data:`prg.checks.RANGES` takes its
-``generate.*`` and ``marks.*`` entries from them. This module imports no numpy (nor the pipeline
-modules that do), so that every command checks its config before loading them;
-:mod:`prg.pipeline.compose` and :mod:`prg.pipeline.marks`, which use these settings, export them
-too.
+``generate.*``, ``marks.*``, ``layout.*`` and ``connection.*`` entries from them. One field is
+not declared: ``ConnectionSettings.alpha_max`` is in radians while the config gives
+``connection.alpha_max_deg`` in degrees, so that option keeps its entry in
+:data:`prg.checks.TABLE` (:data:`prg.checks.ALPHA_MAX_DEG`) and the field is checked against the
+same range, converted. This module imports no numpy (nor the pipeline modules that do), so that
+every command checks its config before loading them; :mod:`prg.pipeline.compose`,
+:mod:`prg.pipeline.marks`, :mod:`prg.pipeline.layout` and :mod:`prg.pipeline.connect`, which use
+these settings, export them too.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Any, Literal
 
-from prg.checks import SEED, SEED_MAX, TEMPERATURE, count, non_negative, positive
+from prg.checks import (
+    ALPHA_MAX_DEG,
+    SEED,
+    SEED_MAX,
+    TEMPERATURE,
+    WEIGHT_MAX,
+    count,
+    non_negative,
+    positive,
+)
 from prg.errors import SettingsError
-from prg.fields import check_fields, ranged
-
-if TYPE_CHECKING:
-    from prg.pipeline.connect import ConnectionSettings
-    from prg.pipeline.layout import LayoutSettings
+from prg.fields import as_float, check_fields, checked, ranged
 
 __all__ = [
     "CONNECTION_METHODS",
     "DECODING_MODES",
     "DEFAULT_SPEED_CM_S",
+    "JOIN_MODES",
     "TIMINGS",
+    "ConnectionSettings",
     "GenerateSettings",
+    "JoinMode",
+    "LayoutSettings",
     "MarkSettings",
 ]
 
@@ -34,18 +49,136 @@ CONNECTION_METHODS = ("hand", "alg1", "straight")
 TIMINGS = ("human", "constant")
 DECODING_MODES = ("hand", "posterior")
 DEFAULT_SPEED_CM_S = 2.0
+JoinMode = Literal["first", "retrace"]
+JOIN_MODES = ("first", "retrace")
+LAYOUT_SIZE = positive(100)  # cm, or fractions of the letter height
 
 
-def _layout() -> LayoutSettings:
-    from prg.pipeline.layout import LayoutSettings
+@dataclass(frozen=True)
+class LayoutSettings:
+    """Sizes of the word layout, in centimetres (ratios relative to ``letter_height``)
+    (:mod:`prg.pipeline.layout`).
 
-    return LayoutSettings()
+    Attributes
+    ----------
+    letter_height : float
+        Height ``H`` of uppercase letters, digits and ascenders (1.5 cm: a robot pen's
+        comfortable size; the x-height is then 0.75 cm).
+    x_height : float
+        Height of x-height letters as a fraction of ``H`` (0.5: the paper's "half-height").
+    descender : float
+        Depth below the baseline of descender tails, as a fraction of ``H`` (0.45).
+    max_width : float
+        Widest a letter may be, as a fraction of ``H`` (1.6: wide enough for ``m``, ``w``, ``W``;
+        guards against a flat decoded letter being blown up).
+    gap : float
+        Horizontal distance between consecutive letters' bounding boxes (0.2 cm).
+    space_width : float
+        Extra horizontal distance per space between words (0.6 cm).
+    ascenders : str
+        Lowercase letters of full height.
+    descenders : str
+        Letters whose tail goes below the baseline.
+
+    Every size is a finite number in (0, 100], the range of the config's ``layout.*``; a refused
+    value raises :class:`~prg.errors.SettingsError` naming its field (``gap must be a finite
+    number in (0, 100], got 0``).
+    """
+
+    letter_height: float = ranged(1.5, LAYOUT_SIZE)
+    x_height: float = ranged(0.5, LAYOUT_SIZE)
+    descender: float = ranged(0.45, LAYOUT_SIZE)
+    max_width: float = ranged(1.6, LAYOUT_SIZE)
+    gap: float = ranged(0.2, LAYOUT_SIZE)
+    space_width: float = ranged(0.6, LAYOUT_SIZE)
+    ascenders: str = "bdfhklt"
+    descenders: str = "fgjpqy"
+
+    def __post_init__(self) -> None:
+        check_fields(self)
 
 
-def _connection() -> ConnectionSettings:
-    from prg.pipeline.connect import ConnectionSettings
+def _alpha_max(value: Any, name: str) -> float:
+    """``value`` (radians) as a float when its degrees lie in :data:`prg.checks.ALPHA_MAX_DEG`,
+    the range of the config's ``connection.alpha_max_deg``."""
+    x = as_float(value, name)
+    if not (math.isfinite(x) and ALPHA_MAX_DEG.accepts(math.degrees(x))):
+        raise SettingsError(name, f"must be in (0, pi] radians, got {value!r}")
+    return x
 
-    return ConnectionSettings()
+
+_FLOATS = ("delta", "theta_o", "theta_a", "theta_f", "theta_p", "home_radius")
+
+
+@dataclass(frozen=True)
+class ConnectionSettings:
+    """Parameters of :func:`prg.pipeline.connect.connect_letters` as the config gives them
+    (lengths in centimetres, angles in radians).
+
+    Defaults are tuned for letters 0.75 cm (x-height) to 1.5 cm (full height) tall, laid out by
+    :mod:`prg.pipeline.layout` with its default gap.
+
+    Attributes
+    ----------
+    delta : float
+        Step length of the connection and the largest gap it leaves (0.05 cm, about the spacing of
+        the 100 points of a decoded letter at this size).
+    alpha_max : float
+        Largest heading change per step (18 degrees): a turning radius of
+        ``delta / (2 sin(alpha_max / 2)) = 0.16 cm``, a pen-like curvature at this letter size.
+    theta_o : float
+        Weight of the index term ``j / m`` (prefers the next letter's early points).
+    theta_a : float
+        Weight of the normalised turn (prefers going straight on: smooth exits).
+    theta_f : float
+        Weight of the normalised distance to the next letter's first point (pulls to its start).
+    theta_p : float
+        Weight of the normalised distance to the candidate's own target point (pulls towards the
+        nearest part of the next letter).
+    home_radius : float
+        Distance to the next letter's first point below which the pen aims at that point alone
+        (0.4 cm, 2.5 turning radii; :mod:`prg.pipeline.connect`).
+    max_steps : int
+        Cap on steered steps before the straight fallback (400 steps = 20 cm of path).
+    join : {"first", "retrace"}
+        How the connection enters the next letter (:mod:`prg.pipeline.connect`).
+
+    The weights were chosen on the synthetic test split (300 random lowercase pairs) and by eye
+    on rendered words: the distance-to-start term dominates (``theta_f = 4``), which gives short,
+    rounded joins (median path 1.03 times the straight distance; the p90 of the total turning of
+    a connection is about 190 degrees, i.e. at most a hook or a loop). Smaller ``theta_f`` or
+    larger ``theta_a`` make wider detours (``theta_f = 1``: p90 path 3.4 times the distance).
+
+    The settings accept what the config accepts (``connection.*`` of :data:`prg.checks.RANGES`,
+    taken from these fields; ``alpha_max`` in (0, pi] radians, the config's ``alpha_max_deg`` in
+    (0, 180]); a refused value raises :class:`~prg.errors.SettingsError` naming its field.
+    :func:`~prg.pipeline.connect.connect_letters` itself takes more: ``home_radius = 0`` (no
+    homing) and ``max_steps = 0`` (the straight joiner). The lengths and weights are stored as
+    ``float``.
+    """
+
+    delta: float = ranged(0.05, positive(10))
+    alpha_max: float = checked(math.radians(18.0), _alpha_max)
+    theta_o: float = ranged(1.0, non_negative(WEIGHT_MAX))
+    theta_a: float = ranged(1.0, non_negative(WEIGHT_MAX))
+    theta_f: float = ranged(4.0, non_negative(WEIGHT_MAX))
+    theta_p: float = ranged(0.5, non_negative(WEIGHT_MAX))
+    home_radius: float = ranged(0.4, positive(100))
+    max_steps: int = ranged(400, count(1, 100_000))
+    join: JoinMode = "first"
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        if self.join not in JOIN_MODES:
+            raise SettingsError(
+                "join", f"must be one of {', '.join(JOIN_MODES)}, got {self.join!r}"
+            )
+        for name in _FLOATS:
+            object.__setattr__(self, name, float(getattr(self, name)))
+
+    def as_kwargs(self) -> dict:
+        """The parameters as keyword arguments of :func:`~prg.pipeline.connect.connect_letters`."""
+        return asdict(self)
 
 
 @dataclass(frozen=True)
@@ -170,8 +303,8 @@ class GenerateSettings:
     basis_per_100_samples: int = ranged(70, count(1, 100))
     delayed_strokes: bool = True
     marks: MarkSettings = field(default_factory=MarkSettings)
-    layout: LayoutSettings = field(default_factory=_layout)
-    connection: ConnectionSettings = field(default_factory=_connection)
+    layout: LayoutSettings = field(default_factory=LayoutSettings)
+    connection: ConnectionSettings = field(default_factory=ConnectionSettings)
 
     def __post_init__(self) -> None:
         check_fields(self)

@@ -10,6 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from prg.checks import check_values
 from prg.data.preprocess import (
     normalise,
     resample_arclength,
@@ -220,9 +221,44 @@ def test_connection_settings_refuse_bad_values_naming_the_field(kwargs, field):
 
 
 def test_connection_settings_hold_floats_and_an_integer_step_count():
-    params = ConnectionSettings(delta=1, theta_f=4, max_steps=10.0)
+    params = ConnectionSettings(delta=1, theta_f=4, max_steps=10)
     assert type(params.delta) is float and type(params.theta_f) is float
     assert type(params.max_steps) is int and params.max_steps == 10
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "message"),
+    [
+        ("max_steps", 0, "an integer in [1, 100,000], got 0"),
+        ("max_steps", 10.0, "an integer in [1, 100,000], got 10.0"),
+        ("home_radius", 0.0, "a finite number in (0, 100], got 0.0"),
+        ("delta", 11.0, "a finite number in (0, 10], got 11.0"),
+        ("theta_a", 2e6, "a finite number in [0, 1,000,000], got 2000000.0"),
+    ],
+)
+def test_connection_settings_refuse_what_the_config_refuses(field, value, message):
+    with pytest.raises(SettingsError) as in_class:
+        ConnectionSettings(**{field: value})
+    assert str(in_class.value) == f"{field} must be {message}"
+    with pytest.raises(UsageError) as in_config:
+        check_values({"connection": {field: value}})
+    assert str(in_config.value) == f"connection.{field} must be {message}"
+
+
+def test_alpha_max_takes_the_range_of_the_configs_degrees():
+    assert ConnectionSettings(alpha_max=math.pi).alpha_max == math.pi  # 180 degrees
+    check_values({"connection": {"alpha_max_deg": 180.0}})
+    for radians in (0.0, math.pi + 1e-9):
+        with pytest.raises(SettingsError, match=r"^alpha_max must be in \(0, pi\] radians"):
+            ConnectionSettings(alpha_max=radians)
+        with pytest.raises(UsageError, match=r"^connection\.alpha_max_deg must be a finite number"):
+            check_values({"connection": {"alpha_max_deg": math.degrees(radians)}})
+
+
+def test_connect_letters_takes_more_than_the_settings():
+    # no homing and no steered steps: the algorithm's own values, not the config's
+    prev, nxt = PAIRS[1]
+    assert connect_letters(prev, nxt, home_radius=0.0, max_steps=0).fallback
 
 
 def test_straight_joiner_spaces_points_evenly_at_most_delta_apart():

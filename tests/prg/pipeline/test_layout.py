@@ -8,6 +8,7 @@ import re
 import numpy as np
 import pytest
 
+from prg.checks import check_values
 from prg.data.preprocess import normalise, resample_arclength
 from prg.errors import SettingsError, UsageError
 from prg.pipeline.layout import (
@@ -131,14 +132,24 @@ def test_unsupported_characters_are_named():
 
 
 def test_bad_layout_values_are_named():
-    with pytest.raises(UsageError, match="letter_height must be a positive"):
+    with pytest.raises(UsageError, match="letter_height must be a finite number in"):
         LayoutSettings(letter_height=0.0)
-    with pytest.raises(UsageError, match="gap must be a non-negative"):
+    with pytest.raises(UsageError, match=r"gap must be a finite number in \(0, 100\]"):
         LayoutSettings(gap=-0.1)
     with pytest.raises(SettingsError) as caught:  # the field, not a config path
         LayoutSettings(max_width=-1.0)
-    assert str(caught.value) == "max_width must be a positive number, got -1.0"
+    assert str(caught.value) == "max_width must be a finite number in (0, 100], got -1.0"
     assert str(caught.value.under("layout")).startswith("layout.max_width ")
+
+
+@pytest.mark.parametrize("field", ["gap", "descender", "space_width", "x_height"])
+def test_the_settings_refuse_what_the_config_refuses(field):
+    # the config's range (layout.* in (0, 100]) is the class's: 0 and sizes over 100 are refused
+    for value in (0.0, 100.5):
+        with pytest.raises(SettingsError, match=rf"^{field} must be a finite number in \(0, 100\]"):
+            LayoutSettings(**{field: value})
+        with pytest.raises(UsageError, match=rf"^layout\.{field} must be a finite number in"):
+            check_values({"layout": {field: value}})
 
 
 def test_word_breaks_mark_pairs_separated_by_spaces():
@@ -168,7 +179,7 @@ CUSTOM = [
         x_height=0.4,
         descender=0.6,
         max_width=2.4,
-        gap=0.0,
+        gap=0.01,
         space_width=0.25,
         ascenders="bdfhkltz",
         descenders="fgy",
@@ -215,13 +226,14 @@ def test_a_custom_ascender_set_replaces_the_default_one():
     assert letter_band("g", p) == pytest.approx((0.0, p.x_height * p.letter_height))
 
 
-def test_zero_gap_descender_and_space_width_are_allowed():
-    p = LayoutSettings(gap=0.0, descender=0.0, space_width=0.0)  # documented as >= 0
+def test_tiny_gap_descender_and_space_width_leave_letters_touching():
+    tiny = 1e-9  # the smallest sizes are just above 0 (0 is refused, as by the config)
+    p = LayoutSettings(gap=tiny, descender=tiny, space_width=tiny)
     placed = layout_letters([letter(1), letter(2), letter(3)], "g a b", p)
     boxes = [box(q) for q in placed]
-    assert boxes[0][1] == pytest.approx(0.0)  # no descender depth
+    assert boxes[0][1] == pytest.approx(0.0, abs=1e-8)  # no descender depth to speak of
     for (_, _, right, _), (left, _, _, _) in itertools.pairwise(boxes):
-        assert left == pytest.approx(right)  # no gap, and spaces add nothing
+        assert left == pytest.approx(right, abs=1e-8)  # no gap, and spaces add next to nothing
 
 
 def test_malformed_characters_and_letters_are_refused():
