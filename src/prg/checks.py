@@ -117,39 +117,10 @@ TEMPERATURE_MAX = 10.0  # latents drawn with their std times this: 1 is the mode
 TEMPERATURE = non_negative(TEMPERATURE_MAX)
 ALPHA_MAX_DEG = Range(0, 180, low_open=True)  # connection.alpha_max_deg: a turn per step
 
-# ---- the fields of library settings classes that take their ranges from a table here ----
-LIKELIHOOD_RANGES: dict[str, Range] = {  # prg.evaluation.settings.LikelihoodSettings
-    "k_marginal": count(1, 1_000_000),
-    "k_conditional": count(1, 1_000_000),
-    "n_test": count(1, optional=True),
-    "batch_size": count(1, 100_000),
-    "chunk_rows": count(1, 10_000_000),  # bounds the memory
-    "traj_std": Range(0, 100, low_open=True, optional=True),
-}
 IMAGE_SHIFT = count(0, 8)  # whole pixels of a 28 x 28 image
-COHERENCE_RANGES: dict[str, Range] = {  # prg.evaluation.settings.CoherenceSettings
-    "impute_steps": count(0, 1000),
-    "batch_size": count(1, 1_000_000),
-}
-CLASSIFIER_RANGES: dict[str, Range] = {  # prg.evaluation.settings.ClassifierSettings
-    "epochs": count(1, 1000),
-    "batch_size": count(1, 1_000_000),
-    "lr": positive(10),
-    "seed": SEED,
-}
-LIKENESS_RANGES: dict[str, Range] = {  # prg.evaluation.settings.LikenessSettings
-    "n_per_class": count(4, 1000),  # the k-NN measures need more than k = 3 letters a class
-}
-STYLE_RANGES: dict[str, Range] = {  # prg.evaluation.settings.StyleSettings
-    "n_eval": count(1, 61),  # classes set aside: the rest train the writer classifier
-    "temperature": TEMPERATURE,
-}
-EVALUATION_RANGES: dict[str, Range] = {  # prg.evaluation.settings.EvaluationSettings
-    "seed": SEED,
-    "n_test": count(1, optional=True),
-}
+N_TEST = count(1, optional=True)  # test samples (null: all)
 
-
+# ---- the fields of library settings classes that take their ranges from a table here ----
 PLOTTER_RANGES: dict[str, Range] = {  # prg.export.PlotterSettings (conf/export.yaml ``plotter``)
     "paper_mm": positive(10_000),
     "position_mm": Range(-10_000, 10_000, optional=True),
@@ -186,6 +157,11 @@ def _under(prefix: str, ranges: dict[str, Range]) -> dict[str, Range]:
 DECLARED: dict[str, tuple[str, str]] = {  # config node -> (module, settings class)
     "generate": ("prg.pipeline.settings", "GenerateSettings"),
     "marks": ("prg.pipeline.settings", "MarkSettings"),
+    "likelihood": ("prg.evaluation.settings", "LikelihoodSettings"),
+    "coherence": ("prg.evaluation.settings", "CoherenceSettings"),
+    "classifier": ("prg.evaluation.settings", "ClassifierSettings"),
+    "likeness": ("prg.evaluation.settings", "LikenessSettings"),
+    "styles": ("prg.evaluation.settings", "StyleSettings"),
     "layout": ("prg.pipeline.settings", "LayoutSettings"),
     "connection": ("prg.pipeline.settings", "ConnectionSettings"),
 }
@@ -262,15 +238,11 @@ TABLE: dict[str, Range] = {
     "callbacks.system_metrics.sampling_interval_s": positive(),
     "quick_epochs.*": count(1),
     "converged_epochs.*": count(1),
-    # prg-evaluate
-    "n_test": count(1, optional=True),
-    **_under("likelihood", LIKELIHOOD_RANGES),
-    **_under("coherence", COHERENCE_RANGES),
+    # prg-evaluate (its settings classes declare the rest; these options hold several numbers,
+    # which the classes check item by item)
+    "n_test": N_TEST,  # top level, as seed: EvaluationSettings declares both with these ranges
     "coherence.temperatures.*": TEMPERATURE,
     "coherence.image_shifts": IMAGE_SHIFT,
-    **_under("classifier", CLASSIFIER_RANGES),
-    **_under("likeness", LIKENESS_RANGES),
-    **_under("styles", STYLE_RANGES),
     "styles.ks": count(1, 61),  # letters given as the style (the other classes are scored)
     "styles.seeds": SEED,
     # prg-write (and prg-dictaphone, prg-simulate, which run it)

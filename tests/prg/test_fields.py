@@ -13,6 +13,13 @@ import pytest
 
 from prg.checks import DECLARED, RANGES, TABLE, Range, check_values, count, range_of
 from prg.errors import SettingsError, UsageError
+from prg.evaluation.settings import (
+    ClassifierSettings,
+    CoherenceSettings,
+    LikelihoodSettings,
+    LikenessSettings,
+    StyleSettings,
+)
 from prg.fields import check_fields, declared_ranges, ranged
 from prg.pipeline.settings import (
     ConnectionSettings,
@@ -26,10 +33,19 @@ SETTINGS = {
     "marks": MarkSettings,
     "layout": LayoutSettings,
     "connection": ConnectionSettings,
+    "likelihood": LikelihoodSettings,
+    "coherence": CoherenceSettings,
+    "classifier": ClassifierSettings,
+    "likeness": LikenessSettings,
+    "styles": StyleSettings,
 }
-# fields held in another unit than their config option, whose range stays in TABLE:
-# node -> {field: option}
-CONVERTED = {"connection": {"alpha_max": "alpha_max_deg"}}
+# fields whose config option keeps its range in TABLE, node -> {field: option}: one held in
+# another unit than its option, and those holding several numbers (checked item by item)
+IN_TABLE = {
+    "connection": {"alpha_max": "alpha_max_deg"},
+    "coherence": {"temperatures": "temperatures.*", "image_shifts": "image_shifts"},
+    "styles": {"ks": "ks", "seeds": "seeds"},
+}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -64,9 +80,9 @@ def test_the_declared_nodes_are_the_settings_classes():
 def test_the_config_check_takes_its_ranges_from_the_declarations(node):
     declared = declared_ranges(SETTINGS[node], node)
     assert declared and all(RANGES[key] is spec for key, spec in declared.items())
-    converted = {f"{node}.{option}" for option in CONVERTED.get(node, {}).values()}
+    kept = {f"{node}.{option}" for option in IN_TABLE.get(node, {}).values()}
     in_table = {key for key in TABLE if key.startswith(f"{node}.")}
-    assert in_table == converted  # written once, not twice
+    assert in_table == kept  # written once, not twice
 
 
 @pytest.mark.parametrize(
@@ -83,6 +99,12 @@ def test_the_config_check_takes_its_ranges_from_the_declarations(node):
         ("connection", "max_steps", 0),
         ("connection", "home_radius", 0.0),
         ("connection", "theta_p", -0.5),
+        ("likelihood", "traj_std", 0.0),
+        ("likelihood", "n_test", 0),
+        ("coherence", "impute_steps", 1001),
+        ("classifier", "lr", 0),
+        ("likeness", "n_per_class", 3),
+        ("styles", "n_eval", 62),
     ],
 )
 def test_one_range_refuses_a_value_in_the_dataclass_and_in_the_config(node, field, value):
@@ -103,14 +125,15 @@ def _numeric(annotation: str) -> bool:
 def test_every_numeric_field_of_a_declaring_class_declares_its_range(node):
     cls = SETTINGS[node]
     numeric = {f.name for f in dataclasses.fields(cls) if _numeric(str(f.type))}
-    assert numeric and numeric - set(CONVERTED.get(node, {})) == set(declared_ranges(cls))
+    assert numeric and numeric - set(IN_TABLE.get(node, {})) == set(declared_ranges(cls))
 
 
-def test_a_converted_field_is_checked_and_its_option_has_a_range():
-    for node, fields in CONVERTED.items():
-        for name, option in fields.items():
-            assert "check" in SETTINGS[node].__dataclass_fields__[name].metadata
-            assert range_of(f"{node}.{option}") is TABLE[f"{node}.{option}"]
+def test_a_field_kept_in_the_table_is_checked_by_its_class_and_its_option_has_a_range():
+    assert "check" in ConnectionSettings.__dataclass_fields__["alpha_max"].metadata
+    for node, fields in IN_TABLE.items():
+        for option in fields.values():
+            key = f"{node}.{option}"
+            assert range_of(key.replace("*", "x")) is TABLE[key]
 
 
 def test_a_numeric_field_without_a_declaration_is_caught():

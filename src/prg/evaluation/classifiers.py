@@ -36,6 +36,7 @@ from tqdm.auto import tqdm
 from prg.alphabet import ALPHABET, NUM_CLASSES
 from prg.data.store import load_split
 from prg.errors import UsageError
+from prg.evaluation.settings import DEFAULT_CFG  # exported here too (the settings' defaults)
 from prg.files import read_json, write_bytes, write_json
 from prg.models.modalities import LABEL
 from prg.models.modalities import MODALITIES as REGISTRY
@@ -45,9 +46,6 @@ log = logging.getLogger(__name__)
 FORMAT = "prg-classifier"
 FORMAT_VERSION = 1
 CFG_KEYS: tuple[str, ...] = ("epochs", "batch_size", "lr", "seed")
-DEFAULT_CFG: dict[str, Any] = {"epochs": 4, "batch_size": 256, "lr": 2e-3, "seed": 0}
-"""Default training settings of both classifiers (measured on 2 CPU cores with the full
-synthetic dataset: 12 s for traj, 59 s for image; more epochs do not help on the test split)."""
 
 SHAPE_TWINS: tuple[str, ...] = ("0Oo", "Cc", "Iil", "Pp", "Ss", "Vv", "Ww", "Xx", "Zz")
 """Groups of classes that are the same shape once size and position are normalised away.

@@ -26,15 +26,12 @@ from collections.abc import Sequence
 import torch
 
 from prg.errors import UsageError
+from prg.evaluation.settings import PAPER_TRAJ_STD  # exported here too (the settings' default)
 from prg.models.base import Gaussian, ImportancePath, Inputs, MultimodalVAE
 from prg.models.likelihoods import Likelihoods
 from prg.models.modalities import IMAGE, LABEL, LETTER, TRAJ
 
 _LOG_2PI = math.log(2 * math.pi)
-
-PAPER_TRAJ_STD = 1.0
-"""Trajectory std of Table I's main table: the reference code's implicit unit-variance Gaussian,
-which puts log p(x_T) on the paper's scale (about -197 nats)."""
 
 MODEL_STD_SUFFIX = "_model_std"
 """Suffix of a trajectory cell scored under the model's own std (``logp_T_model_std``), the

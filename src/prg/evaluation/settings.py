@@ -2,30 +2,53 @@
 
 A refused value raises :class:`~prg.errors.SettingsError` naming the field (``k_marginal``); the
 command layer (:mod:`prg.commands.evaluate`) adds the config path (``likelihood.k_marginal``).
-The numeric fields' ranges are tables of :mod:`prg.checks` (``LIKELIHOOD_RANGES`` ...), which
-also checks the config options with them.
+Each numeric field declares the values it accepts (:func:`prg.fields.ranged`): the dataclass
+checks them (:func:`prg.fields.check_fields`) and :data:`prg.checks.RANGES` takes its
+``likelihood.*``, ``coherence.*``, ``classifier.*``, ``likeness.*`` and ``styles.*`` entries from
+them (:data:`prg.checks.DECLARED`). The options holding several numbers (``coherence.temperatures``,
+``coherence.image_shifts``, ``styles.ks``, ``styles.seeds``) and the top-level ``seed`` and
+``n_test``, which other commands share, keep their entries in :data:`prg.checks.TABLE`
+(:class:`EvaluationSettings` declares its ``seed`` and ``n_test`` with the same ranges).
+
+This module imports no numpy or torch (the Table I cells are read from
+:mod:`prg.evaluation.likelihood` when a value is checked), so that ``prg-evaluate`` checks its
+config before loading them; :data:`PAPER_TRAJ_STD` and :data:`DEFAULT_CFG` live here and
+:mod:`prg.evaluation.likelihood` and :mod:`prg.evaluation.classifiers` export them too.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 from prg.checks import (
-    CLASSIFIER_RANGES,
-    COHERENCE_RANGES,
-    EVALUATION_RANGES,
     IMAGE_SHIFT,
-    LIKELIHOOD_RANGES,
-    LIKENESS_RANGES,
-    STYLE_RANGES,
+    N_TEST,
+    SEED,
     TEMPERATURE,
+    Range,
+    count,
+    positive,
     require_number,
 )
 from prg.errors import SettingsError
-from prg.evaluation.classifiers import DEFAULT_CFG
-from prg.evaluation.likelihood import PAPER_TRAJ_STD, TABLE1_CELLS
-from prg.fields import check_ranges
+from prg.fields import check_fields, ranged
+
+PAPER_TRAJ_STD = 1.0
+"""Trajectory std of Table I's main table: the reference code's implicit unit-variance Gaussian,
+which puts log p(x_T) on the paper's scale (about -197 nats)."""
+
+DEFAULT_CFG: dict[str, Any] = {"epochs": 4, "batch_size": 256, "lr": 2e-3, "seed": 0}
+"""Default training settings of both classifiers (measured on 2 CPU cores with the full
+synthetic dataset: 12 s for traj, 59 s for image; more epochs do not help on the test split)."""
+
+
+def _table1_cells() -> dict[str, tuple[str, tuple[str, ...]]]:
+    from prg.evaluation.likelihood import TABLE1_CELLS  # torch: imported when a value is checked
+
+    return TABLE1_CELLS
+
 
 PARTS = ("classifiers", "likelihood", "coherence", "likeness", "styles", "kinematics")
 IMPUTED = "imputed"
@@ -56,16 +79,17 @@ class LikelihoodSettings:
     """
 
     cells: str | tuple[str, ...] = "all"
-    k_marginal: int = 1000
-    k_conditional: int = 5000
-    n_test: int | None = None
-    batch_size: int = 64
-    chunk_rows: int = 4096
-    traj_std: float | None = PAPER_TRAJ_STD
+    k_marginal: int = ranged(1000, count(1, 1_000_000))
+    k_conditional: int = ranged(5000, count(1, 1_000_000))
+    n_test: int | None = ranged(None, N_TEST)
+    batch_size: int = ranged(64, count(1, 100_000))
+    chunk_rows: int = ranged(4096, count(1, 10_000_000))  # bounds the memory
+    traj_std: float | None = ranged(PAPER_TRAJ_STD, Range(0, 100, low_open=True, optional=True))
 
     def __post_init__(self) -> None:
-        check_ranges(self, LIKELIHOOD_RANGES)
+        check_fields(self)
         if self.cells != "all":
+            TABLE1_CELLS = _table1_cells()
             cells = [self.cells] if isinstance(self.cells, str) else list(self.cells)
             unknown = [c for c in cells if c not in TABLE1_CELLS]
             if unknown or not cells:
@@ -79,7 +103,7 @@ class LikelihoodSettings:
         """Table I cells to estimate, and whether they were named explicitly (then every model
         must support every one)."""
         if self.cells == "all":
-            return list(TABLE1_CELLS), False
+            return list(_table1_cells()), False
         return list(self.cells), True
 
 
@@ -104,8 +128,8 @@ class CoherenceSettings:
     """
 
     temperatures: Mapping[str, float] = field(default_factory=lambda: {"mean": 0.0, "sampled": 1.0})
-    impute_steps: int = 0
-    batch_size: int = 512
+    impute_steps: int = ranged(0, count(0, 1000))
+    batch_size: int = ranged(512, count(1, 1_000_000))
     image_shifts: tuple[int, ...] = (1, 2)
 
     def __post_init__(self) -> None:
@@ -115,7 +139,7 @@ class CoherenceSettings:
         if IMPUTED in self.temperatures:
             # "temperatures:" keeps the message users know: "coherence.temperatures: 'imputed' ..."
             raise SettingsError("temperatures:", f"{IMPUTED!r} names the imputed kind; rename it")
-        check_ranges(self, COHERENCE_RANGES)
+        check_fields(self)
         for i, shift in enumerate(self.image_shifts):
             require_number(shift, f"image_shifts[{i}]", IMAGE_SHIFT)
         object.__setattr__(self, "temperatures", dict(self.temperatures))
@@ -133,11 +157,12 @@ class LikenessSettings:
         held-out writers; ``train``: the training writers' originals).
     """
 
-    n_per_class: int = 10
+    # the k-NN measures need more than k = 3 letters a class
+    n_per_class: int = ranged(10, count(4, 1000))
     references: tuple[str, ...] = ("val", "train")
 
     def __post_init__(self) -> None:
-        check_ranges(self, LIKENESS_RANGES)
+        check_fields(self)
         refs = tuple(self.references)
         if any(r not in ("train", "val") for r in refs):
             raise SettingsError("references", f"{list(refs)}: choose from ['train', 'val']")
@@ -157,11 +182,12 @@ class StyleSettings:
 
     ks: tuple[int, ...] = (1, 5, 15)
     seeds: tuple[int, ...] = (0, 1, 2)
-    n_eval: int = 12
-    temperature: float = 0.5
+    # classes set aside: the rest train the writer classifier
+    n_eval: int = ranged(12, count(1, 61))
+    temperature: float = ranged(0.5, TEMPERATURE)
 
     def __post_init__(self) -> None:
-        check_ranges(self, STYLE_RANGES)
+        check_fields(self)
         for name in ("ks", "seeds"):
             values = tuple(getattr(self, name))
             if not values or any(
@@ -198,13 +224,13 @@ class ClassifierSettings:
     """How the coherence classifiers are trained (``classifier``, without its ``dir``;
     :func:`prg.evaluation.classifiers.ensure_classifiers`)."""
 
-    epochs: int = DEFAULT_CFG["epochs"]
-    batch_size: int = DEFAULT_CFG["batch_size"]
-    lr: float = DEFAULT_CFG["lr"]
-    seed: int = DEFAULT_CFG["seed"]
+    epochs: int = ranged(DEFAULT_CFG["epochs"], count(1, 1000))
+    batch_size: int = ranged(DEFAULT_CFG["batch_size"], count(1, 1_000_000))
+    lr: float = ranged(DEFAULT_CFG["lr"], positive(10))
+    seed: int = ranged(DEFAULT_CFG["seed"], SEED)
 
     def __post_init__(self) -> None:
-        check_ranges(self, CLASSIFIER_RANGES)
+        check_fields(self)
 
 
 @dataclass(frozen=True)
@@ -218,8 +244,8 @@ class EvaluationSettings:
     """
 
     parts: tuple[str, ...] = ("likelihood", "coherence")
-    seed: int = 0
-    n_test: int | None = None
+    seed: int = ranged(0, SEED)  # the top-level seed and n_test: prg.checks.TABLE's entries
+    n_test: int | None = ranged(None, N_TEST)
     progress: bool = True
     figures: bool = True
     likelihood: LikelihoodSettings = field(default_factory=LikelihoodSettings)
@@ -234,7 +260,7 @@ class EvaluationSettings:
         unknown = [p for p in parts if p not in PARTS]
         if unknown or not parts:
             raise SettingsError("parts", f"{parts}: choose from {list(PARTS)}")
-        check_ranges(self, EVALUATION_RANGES)
+        check_fields(self)
         object.__setattr__(self, "parts", tuple(parts))
 
     @property

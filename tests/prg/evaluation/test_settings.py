@@ -30,3 +30,33 @@ def test_settings_of_the_shipped_config_and_of_the_library_alone():
         CoherenceSettings(temperatures={"mean": float("nan")})
     with pytest.raises(SettingsError, match=r"^n_test must be an integer >= 1 or null"):
         EvaluationSettings(n_test=0)
+
+
+def test_the_module_imports_no_numpy_or_torch():
+    # prg-evaluate checks its config against the ranges declared here before loading either
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, prg.evaluation.settings as s; s.EvaluationSettings(); "
+        "print('numpy' in sys.modules, 'torch' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False False"
+
+
+def test_the_modules_that_use_the_defaults_export_the_same_values():
+    from prg.evaluation import classifiers, likelihood, settings
+
+    assert likelihood.PAPER_TRAJ_STD == settings.PAPER_TRAJ_STD == 1.0
+    assert classifiers.DEFAULT_CFG is settings.DEFAULT_CFG
+    assert settings.LikelihoodSettings().traj_std == settings.PAPER_TRAJ_STD
+
+
+def test_unknown_cells_are_named_with_the_table_i_cells():
+    from prg.errors import SettingsError
+    from prg.evaluation.settings import LikelihoodSettings
+
+    with pytest.raises(SettingsError, match=r"^cells \['logp_X'\]: use 'all' or a list of"):
+        LikelihoodSettings(cells=["logp_X"])
+    assert LikelihoodSettings(cells="logp_S").cells == ("logp_S",)
