@@ -19,7 +19,14 @@ from prg.pipeline.dmp import (
     forcing_targets,
     rollout,
 )
-from tests.helpers.dmp import moving_curve, rk4_reference, rmse, word_dmp, word_like  # noqa: F401 (fixtures)
+from tests.helpers.dmp import (  # noqa: F401 (fixtures)
+    moving_curve,
+    rk4_reference,
+    rmse,
+    word,
+    word_dmp,
+    word_like,
+)
 
 
 def test_a_demonstration_that_starts_moving_leaves_the_documented_transient():
