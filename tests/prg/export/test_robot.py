@@ -17,7 +17,13 @@ from prg.export import (
     LimitSettings,
 )
 from prg.export.robot import robot_trajectory
-from tests.helpers.export import PANDA_ARM, panda_datasheet, read_mcap, written  # noqa: F401 (fixtures)
+from tests.helpers.export import (  # noqa: F401 (fixtures)
+    PANDA_ARM,
+    panda_datasheet,
+    read_mcap,
+    word,
+    written,
+)
 
 # ----------------------------------------------------------------------------- robot files
 
