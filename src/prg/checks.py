@@ -12,10 +12,10 @@ Each range is written once. An option read into a settings dataclass takes its r
 field's declaration (:func:`prg.fields.ranged`): :data:`DECLARED` names the config node and its
 class (``generate``: ``prg.pipeline.settings.GenerateSettings``), and :data:`RANGES` is built on
 first use from those classes' declared fields (``generate.seed`` ...) and :data:`TABLE`, the
-options with no declaring settings class behind them (data, model, trainer ...; and, until
-their classes declare their fields, those checked with the ``*_RANGES`` tables below through
-:func:`prg.fields.check_ranges`). The declaring settings modules import no numpy, so the check
-still runs before any heavy library is loaded.
+options with no declaring settings class behind them (data, model, trainer ...) and those a
+class checks against a named constant here (a top-level key read by several commands, an option
+holding several numbers, checked item by item). The declaring settings modules import no numpy,
+so the check still runs before any heavy library is loaded.
 
 :data:`CHOICES` holds the options that name one of a fixed set (``family``: :data:`FAMILIES`),
 checked by :func:`check_values` too, and :func:`unknown_key` is the line for an option the
@@ -120,38 +120,13 @@ ALPHA_MAX_DEG = Range(0, 180, low_open=True)  # connection.alpha_max_deg: a turn
 IMAGE_SHIFT = count(0, 8)  # whole pixels of a 28 x 28 image
 N_TEST = count(1, optional=True)  # test samples (null: all)
 
-# ---- the fields of library settings classes that take their ranges from a table here ----
-PLOTTER_RANGES: dict[str, Range] = {  # prg.export.PlotterSettings (conf/export.yaml ``plotter``)
-    "paper_mm": positive(10_000),
-    "position_mm": Range(-10_000, 10_000, optional=True),
-    "scale": positive(1000),
-}
-GCODE_RANGES: dict[str, Range] = {  # prg.export.GcodeSettings (conf/export.yaml ``gcode``)
-    "origin_mm": Range(-10_000, 10_000),
-    "z_up_mm": Range(-1000, 1000),
-    "z_down_mm": Range(-1000, 1000),
-    "z_feed_mm_min": positive(1_000_000),
-    "servo_wait_s": non_negative(60),
-    "max_feed_mm_min": Range(0, 1_000_000, low_open=True, optional=True),
-    "decimals": count(2, 6),
-}
-HPGL_RANGES: dict[str, Range] = {  # prg.export.HpglSettings (conf/export.yaml ``hpgl``)
-    "velocity": count(1, 100, optional=True),  # VS, cm/s
-}
-LIMIT_RANGES: dict[str, Range] = {  # prg.export.LimitSettings (conf/export.yaml ``limits``)
-    "max_slow_down": Range(1, 1000),
-    "contact_above_mm": Range(0, 100, optional=True),
-    "compliance_mm": Range(0, 100, optional=True),
-}
-EXPORT_RANGES: dict[str, Range] = {  # prg.export.ExportSettings' own numbers
-    "tempo": Range(0, 10, low_open=True),
-    "sample_dt_s": Range(0, 0.1, low_open=True),
-}
-
-
-def _under(prefix: str, ranges: dict[str, Range]) -> dict[str, Range]:
-    return {f"{prefix}.{name}": spec for name, spec in ranges.items()}
-
+# ---- the options of prg-export whose settings classes check them against these constants ----
+SCALE = positive(1000)  # the word's size relative to its own: prg-simulate, prg-export (plotter)
+TEMPO = positive(10)  # multiplies the DMP's duration: prg-simulate, prg-export
+SAMPLE_DT_S = Range(0, 0.1, low_open=True)  # prg-export: the G-code's rollout step (s)
+PAPER_MM = positive(10_000)  # plotter.paper_mm: each of the sheet's two sizes
+POSITION_MM = Range(-10_000, 10_000, optional=True)  # plotter.position_mm: each coordinate
+ORIGIN_MM = Range(-10_000, 10_000)  # gcode.origin_mm: each coordinate
 
 # ---- the config nodes whose ranges their settings class declares (prg.fields.ranged) ----
 DECLARED: dict[str, tuple[str, str]] = {  # config node -> (module, settings class)
@@ -164,6 +139,9 @@ DECLARED: dict[str, tuple[str, str]] = {  # config node -> (module, settings cla
     "styles": ("prg.evaluation.settings", "StyleSettings"),
     "layout": ("prg.pipeline.settings", "LayoutSettings"),
     "connection": ("prg.pipeline.settings", "ConnectionSettings"),
+    "gcode": ("prg.export.settings", "GcodeSettings"),
+    "hpgl": ("prg.export.settings", "HpglSettings"),
+    "limits": ("prg.export.settings", "LimitSettings"),
 }
 
 # ---- every other numeric option of conf/ (prepare, train, evaluate, write, dictaphone, ...) ----
@@ -260,8 +238,8 @@ TABLE: dict[str, Range] = {
     # prg-dictaphone
     "speed": Range(10, 1000),  # espeak-ng words per minute
     # prg-simulate
-    "scale": positive(1000),
-    "tempo": positive(10),
+    "scale": SCALE,
+    "tempo": TEMPO,
     "workspace_step_cm": positive(100),
     "paper.size_cm": positive(1000),
     "paper.centre": METRES,
@@ -297,13 +275,14 @@ TABLE: dict[str, Range] = {
     "robot.pen_radius": positive(1),
     "robot.base_position": METRES,
     "robot.base_yaw_deg": DEGREES,
-    # prg-export
-    "sample_dt_s": EXPORT_RANGES["sample_dt_s"],
-    "plotter.paper_mm": PLOTTER_RANGES["paper_mm"],
-    "plotter.position_mm": PLOTTER_RANGES["position_mm"],
-    **_under("gcode", GCODE_RANGES),
-    **_under("hpgl", HPGL_RANGES),
-    **_under("limits", LIMIT_RANGES),
+    # prg-export (its settings classes declare the rest; ExportSettings declares sample_dt_s and
+    # tempo, PlotterSettings checks scale, with these constants: top-level keys, as seed; and
+    # the options holding two numbers, which the classes check item by item: PlotterSettings
+    # declares no range, so plotter is not in DECLARED)
+    "sample_dt_s": SAMPLE_DT_S,
+    "plotter.paper_mm": PAPER_MM,
+    "plotter.position_mm": POSITION_MM,
+    "gcode.origin_mm": ORIGIN_MM,
     "limits.joints.*.lower": DEGREES,  # rad
     "limits.joints.*.upper": DEGREES,
     "limits.joints.*.velocity": positive(1000),  # rad/s

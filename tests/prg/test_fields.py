@@ -16,9 +16,17 @@ from prg.errors import SettingsError, UsageError
 from prg.evaluation.settings import (
     ClassifierSettings,
     CoherenceSettings,
+    EvaluationSettings,
     LikelihoodSettings,
     LikenessSettings,
     StyleSettings,
+)
+from prg.export.settings import (
+    ExportSettings,
+    GcodeSettings,
+    HpglSettings,
+    LimitSettings,
+    PlotterSettings,
 )
 from prg.fields import check_fields, declared_ranges, ranged
 from prg.pipeline.settings import (
@@ -38,14 +46,32 @@ SETTINGS = {
     "classifier": ClassifierSettings,
     "likeness": LikenessSettings,
     "styles": StyleSettings,
+    "gcode": GcodeSettings,
+    "hpgl": HpglSettings,
+    "limits": LimitSettings,
 }
+# settings classes of a config node that declare no range: each of their numbers is kept in
+# TABLE (IN_TABLE, AT_TOP), so the node is not in DECLARED
+UNDECLARED = {"plotter": PlotterSettings}
 # fields whose config option keeps its range in TABLE, node -> {field: option}: one held in
 # another unit than its option, and those holding several numbers (checked item by item)
 IN_TABLE = {
     "connection": {"alpha_max": "alpha_max_deg"},
     "coherence": {"temperatures": "temperatures.*", "image_shifts": "image_shifts"},
     "styles": {"ks": "ks", "seeds": "seeds"},
+    "plotter": {"paper_mm": "paper_mm", "position_mm": "position_mm"},
+    "gcode": {"origin_mm": "origin_mm"},
 }
+# fields whose option is a top-level key of TABLE read by several commands (as seed), node ->
+# {field: key}; the class checks the field against TABLE's own entry
+AT_TOP = {"plotter": {"scale": "scale"}}
+# options under a declared node that its class does not hold, in TABLE: limits.joints, each
+# robot's datasheet, read by prg.export.limits.JointLimits (vectors, one number per joint)
+BESIDE = {
+    "limits": {f"joints.*.{q}" for q in ("lower", "upper", "velocity", "acceleration", "jerk")}
+}
+# the settings classes of a whole command (their own fields: top-level keys, kept in TABLE)
+TOP_LEVEL = {"prg-evaluate": EvaluationSettings, "prg-export": ExportSettings}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -81,6 +107,7 @@ def test_the_config_check_takes_its_ranges_from_the_declarations(node):
     declared = declared_ranges(SETTINGS[node], node)
     assert declared and all(RANGES[key] is spec for key, spec in declared.items())
     kept = {f"{node}.{option}" for option in IN_TABLE.get(node, {}).values()}
+    kept |= {f"{node}.{option}" for option in BESIDE.get(node, ())}
     in_table = {key for key in TABLE if key.startswith(f"{node}.")}
     assert in_table == kept  # written once, not twice
 
@@ -105,6 +132,12 @@ def test_the_config_check_takes_its_ranges_from_the_declarations(node):
         ("classifier", "lr", 0),
         ("likeness", "n_per_class", 3),
         ("styles", "n_eval", 62),
+        ("gcode", "decimals", 7),
+        ("gcode", "z_feed_mm_min", 0),
+        ("gcode", "max_feed_mm_min", 0.0),
+        ("hpgl", "velocity", 101),
+        ("limits", "max_slow_down", 0.5),
+        ("limits", "compliance_mm", -1.0),
     ],
 )
 def test_one_range_refuses_a_value_in_the_dataclass_and_in_the_config(node, field, value):
@@ -121,11 +154,13 @@ def _numeric(annotation: str) -> bool:
     return bool(re.search(r"\b(int|float)\b", annotation))
 
 
-@pytest.mark.parametrize("node", sorted(SETTINGS))
-def test_every_numeric_field_of_a_declaring_class_declares_its_range(node):
-    cls = SETTINGS[node]
+@pytest.mark.parametrize("node", sorted(SETTINGS | UNDECLARED))
+def test_every_numeric_field_of_a_settings_class_declares_its_range_or_is_kept(node):
+    cls = (SETTINGS | UNDECLARED)[node]
     numeric = {f.name for f in dataclasses.fields(cls) if _numeric(str(f.type))}
-    assert numeric and numeric - set(IN_TABLE.get(node, {})) == set(declared_ranges(cls))
+    kept = set(IN_TABLE.get(node, {})) | set(AT_TOP.get(node, {}))
+    assert numeric and numeric - kept == set(declared_ranges(cls))
+    assert (node in DECLARED) == bool(declared_ranges(cls))
 
 
 def test_a_field_kept_in_the_table_is_checked_by_its_class_and_its_option_has_a_range():
@@ -134,6 +169,21 @@ def test_a_field_kept_in_the_table_is_checked_by_its_class_and_its_option_has_a_
         for option in fields.values():
             key = f"{node}.{option}"
             assert range_of(key.replace("*", "x")) is TABLE[key]
+
+
+def test_a_field_read_from_a_top_level_key_is_checked_against_that_keys_entry():
+    for node, fields in AT_TOP.items():
+        for name, key in fields.items():
+            check = (SETTINGS | UNDECLARED)[node].__dataclass_fields__[name].metadata["check"]
+            assert check.keywords == {"spec": TABLE[key]}
+            assert f"{node}.{name}" not in RANGES  # no option of that name under the node
+
+
+@pytest.mark.parametrize("command", sorted(TOP_LEVEL))
+def test_a_commands_own_numbers_are_top_level_keys_declared_with_the_tables_entries(command):
+    declared = declared_ranges(TOP_LEVEL[command])
+    assert declared and all(TABLE[key] is spec for key, spec in declared.items())
+    assert TOP_LEVEL[command] not in SETTINGS.values()  # no node: TABLE keeps the keys
 
 
 def test_a_numeric_field_without_a_declaration_is_caught():

@@ -35,9 +35,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from prg.checks import LIMIT_RANGES
 from prg.errors import SettingsError, UsageError
-from prg.fields import FromMapping, check, check_ranges
+from prg.export.settings import LimitSettings
+from prg.fields import check
 
 __all__ = [
     "QUANTITIES",
@@ -54,30 +54,6 @@ QUANTITIES = ("velocity", "acceleration", "jerk")
 _POWER = {"velocity": 1, "acceleration": 2, "jerk": 3}  # a uniform slow-down k divides by k**power
 _UNITS = {"velocity": "rad/s", "acceleration": "rad/s²", "jerk": "rad/s³"}
 _SLACK = 1e-9  # relative: a value this close to its limit fits (the slowed timing's own rounding)
-
-
-@dataclass(frozen=True)
-class LimitSettings(FromMapping):
-    """How strict the check before a robot export is.
-
-    Attributes
-    ----------
-    max_slow_down : float
-        The largest uniform slow-down of the timing accepted (1: none; the trajectory must fit
-        as planned).
-    contact_above_mm : float or None
-        A pen-down waypoint may be at most this far above the paper; None: the simulator's
-        contact band (``control.contact_band_mm``).
-    compliance_mm : float or None
-        No waypoint may be further than this below the paper surface; None: the contact band.
-    """
-
-    max_slow_down: float = 4.0
-    contact_above_mm: float | None = None
-    compliance_mm: float | None = None
-
-    def __post_init__(self) -> None:
-        check_ranges(self, LIMIT_RANGES)
 
 
 def _limit_vector(value: Any, name: str, n: int, *, positive: bool) -> NDArray[np.float64] | None:

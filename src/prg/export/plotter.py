@@ -30,9 +30,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from prg.checks import GCODE_RANGES, HPGL_RANGES, PLOTTER_RANGES, Range
 from prg.errors import UsageError
-from prg.fields import FromMapping, check, check_ranges, vector
+from prg.export.settings import (
+    UNITS,
+    GcodeSettings,
+    HpglSettings,
+    PlotterSettings,
+)
 
 if TYPE_CHECKING:
     from prg.pipeline.word import WordTrajectory
@@ -53,148 +57,6 @@ __all__ = [
 ]
 
 _Float = NDArray[np.float64]
-
-PEN_MODES = ("z", "servo")
-UNITS = {"mm": ("G21", "millimetres", 1.0), "inch": ("G20", "inches", 1 / 25.4)}
-# a servo command is one G-code word with its parameters, e.g. "M3 S1000", "M5", "M280 P0 S90"
-_COMMAND = re.compile(r"^[GM]\d+(?: [A-Z][-+]?\d+(?:\.\d+)?)*$")
-
-
-def _range_list(settings: Any, name: str, spec: Range) -> None:
-    """Each element of a tuple field within ``spec`` (``check_ranges`` takes one number)."""
-    from prg.checks import require_number
-
-    for i, value in enumerate(getattr(settings, name)):
-        require_number(value, f"{name}[{i}]", spec)
-
-
-@dataclass(frozen=True)
-class PlotterSettings(FromMapping):
-    """The sheet on the plotter and where the word goes on it.
-
-    Attributes
-    ----------
-    paper_mm : tuple of float
-        Width (x, along the writing line) and height of the sheet (mm); A4 landscape by default.
-    position_mm : tuple of float or None
-        Lower-left corner of the word's ink bounding box on the sheet (mm from the sheet's
-        lower-left corner); None: the word is centred.
-    scale : float
-        The word's size on paper relative to its own (cm) size.
-    """
-
-    paper_mm: tuple[float, float] = (297.0, 210.0)
-    position_mm: tuple[float, float] | None = None
-    scale: float = 1.0
-
-    def __post_init__(self) -> None:
-        size = vector(self.paper_mm, "paper_mm", 2, "must be two positive numbers (mm)")
-        object.__setattr__(self, "paper_mm", size)
-        _range_list(self, "paper_mm", PLOTTER_RANGES["paper_mm"])
-        if self.position_mm is not None:
-            where = vector(self.position_mm, "position_mm", 2, "must be two numbers (mm) or null")
-            object.__setattr__(self, "position_mm", where)
-            _range_list(self, "position_mm", PLOTTER_RANGES["position_mm"])
-        check_ranges(self, {"scale": PLOTTER_RANGES["scale"]})
-
-
-@dataclass(frozen=True)
-class GcodeSettings(FromMapping):
-    """G-code for a GRBL pen plotter.
-
-    Attributes
-    ----------
-    origin_mm : tuple of float
-        Machine coordinates (work coordinates of the program) of the sheet's lower-left corner.
-    pen : str
-        ``z``: the pen is lowered and raised by Z moves; ``servo``: by ``servo_down`` and
-        ``servo_up`` commands (each followed by a ``G4`` wait of ``servo_wait_s``).
-    z_up_mm, z_down_mm : float
-        Z of the pen up and down (``z_up_mm`` > ``z_down_mm``).
-    z_feed_mm_min : float
-        Feed of the pen-down Z move (the pen-up move is rapid, ``G0``).
-    servo_down, servo_up : str
-        The servo commands (one G-code word with parameters: ``M3 S1000``, ``M5``).
-    servo_wait_s : float
-        Dwell after each servo command, for the pen to settle.
-    max_feed_mm_min : float or None
-        The machine's fastest feed (GRBL ``$110``/``$111``); a word that needs more is refused
-        (GRBL would clamp it and write slower than planned). None: not checked.
-    decimals : int
-        Decimals of the coordinates in ``units`` (3: micrometres in mm; give 4 or more for
-        inches).
-    units : str
-        ``mm`` (``G21``) or ``inch`` (``G20``): the unit of the program's coordinates and feeds;
-        the settings above stay in millimetres.
-    """
-
-    origin_mm: tuple[float, float] = (0.0, 0.0)
-    pen: str = "z"
-    z_up_mm: float = 5.0
-    z_down_mm: float = 0.0
-    z_feed_mm_min: float = 1000.0
-    servo_down: str = "M3 S1000"
-    servo_up: str = "M5"
-    servo_wait_s: float = 0.2
-    max_feed_mm_min: float | None = None
-    decimals: int = 3
-    units: str = "mm"
-
-    def __post_init__(self) -> None:
-        origin = vector(self.origin_mm, "origin_mm", 2, "must be two numbers (mm)")
-        object.__setattr__(self, "origin_mm", origin)
-        _range_list(self, "origin_mm", GCODE_RANGES["origin_mm"])
-        check_ranges(self, {k: v for k, v in GCODE_RANGES.items() if k != "origin_mm"})
-        check(self.pen in PEN_MODES, "pen", f"must be {' or '.join(PEN_MODES)}, got {self.pen!r}")
-        check(self.units in UNITS, "units", f"must be {' or '.join(UNITS)}, got {self.units!r}")
-        check(
-            self.z_up_mm > self.z_down_mm,
-            "z_up_mm",
-            f"must be above z_down_mm ({self.z_down_mm:g}), got {self.z_up_mm!r}",
-        )
-        for name in ("servo_down", "servo_up"):
-            value = getattr(self, name)
-            check(
-                isinstance(value, str) and bool(_COMMAND.match(value)),
-                name,
-                f"must be one G-code command such as 'M3 S1000' or 'M5', got {value!r}",
-            )
-
-
-@dataclass(frozen=True)
-class HpglSettings(FromMapping):
-    """HPGL through vpype's device profiles.
-
-    Attributes
-    ----------
-    device : str
-        A plotter vpype knows (``hp7475a``, ``hp7440a``, ``hp7550``, ``dxy``, ``sketchmate`` ...).
-    page : str or None
-        One of the device's paper names (``a4``, ``a3``, ``letter`` ...); None: the one of
-        ``plotter.paper_mm``'s size.
-    absolute : bool
-        Absolute coordinates (``PA``) throughout, else relative (``PR``, vpype's default).
-    velocity : int or None
-        Pen speed (``VS``, cm/s); None: the plotter's own.
-    """
-
-    device: str = "hp7475a"
-    page: str | None = None
-    absolute: bool = True
-    velocity: int | None = None
-
-    def __post_init__(self) -> None:
-        check(isinstance(self.device, str) and bool(self.device), "device", "must be a device name")
-        check(
-            self.page is None or isinstance(self.page, str), "page", "must be a paper name or null"
-        )
-        check(
-            isinstance(self.absolute, bool),
-            "absolute",
-            f"must be true or false, got {self.absolute!r}",
-        )
-        check_ranges(self, HPGL_RANGES)
-
 
 # ----------------------------------------------------------------------------- placement
 

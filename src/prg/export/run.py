@@ -12,18 +12,12 @@ from __future__ import annotations
 
 import logging
 import os
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from prg.checks import EXPORT_RANGES
 from prg.errors import UsageError
-from prg.export.limits import JointLimits, LimitSettings
 from prg.export.plotter import (
-    GcodeSettings,
-    HpglSettings,
-    PlotterSettings,
     gcode_text,
     hpgl_text,
     ink_strokes,
@@ -31,98 +25,21 @@ from prg.export.plotter import (
     svg_text,
     timed_strokes,
 )
-from prg.fields import check, check_ranges
+from prg.export.settings import FILES, FORMATS, ExportSettings
 from prg.files import staged_outputs, write_json, write_text
 
 if TYPE_CHECKING:
     from prg.export.robot import RobotTrajectory
     from prg.pipeline.word import WordTrajectory
-    from prg.sim import RobotSettings, SimResult, SimSettings
+    from prg.sim import SimResult
 
 log = logging.getLogger(__name__)
 
 __all__ = ["FILES", "FORMATS", "ExportResult", "ExportSettings", "export_word"]
 
-FILES = {
-    "gcode": "word.gcode",
-    "hpgl": "word.hpgl",
-    "svg": "word.svg",
-    "mcap": "word.mcap",
-    "csv": "word.csv",
-}
-FORMATS = tuple(FILES)
 PLOTTER_FORMATS = ("gcode", "hpgl", "svg")
 ROBOT_FORMATS = ("mcap", "csv")
 TIMED_FORMATS = ("gcode", "mcap", "csv")
-
-
-def check_formats(formats: Any) -> tuple[str, ...]:
-    """``formats`` as a tuple of known format names (one name alone is accepted)."""
-    if isinstance(formats, str):
-        formats = [formats]
-    if not isinstance(formats, Sequence) or not formats:
-        raise UsageError(f"formats must be a list of {', '.join(FORMATS)}, got {formats!r}")
-    names = []
-    for name in formats:
-        if name not in FORMATS:
-            raise UsageError(f"formats: unknown format {name!r}: accepted are {', '.join(FORMATS)}")
-        if name not in names:
-            names.append(name)
-    return tuple(names)
-
-
-@dataclass(frozen=True)
-class ExportSettings:
-    """What to export and how.
-
-    Attributes
-    ----------
-    formats : tuple of str
-        Any of ``gcode``, ``hpgl``, ``svg`` (pen plotters) and ``mcap``, ``csv`` (robot arms).
-    tempo : float
-        Multiplies the DMP's duration for the plotter (2: twice as slow); the arm's is
-        ``sim.tempo``.
-    sample_dt_s : float
-        Spacing of the DMP rollout the G-code follows (one move per step).
-    plotter, gcode, hpgl : PlotterSettings, GcodeSettings, HpglSettings
-    robot : RobotSettings or None
-        The arm (robot formats); None: the Panda of ``conf/robot/panda.yaml``.
-    sim : SimSettings or None
-        The simulation that computes the arm's trajectory (paper, placement, motion, IK ...);
-        None: ``conf/simulate.yaml``'s defaults.
-    limits : LimitSettings
-    datasheets : mapping of str to mapping
-        Per robot name, its datasheet limits (:meth:`JointLimits.from_mapping`); a robot
-        without one is checked against its URDF alone.
-    """
-
-    formats: tuple[str, ...] = FORMATS
-    tempo: float = 1.0
-    sample_dt_s: float = 0.01
-    plotter: PlotterSettings = field(default_factory=PlotterSettings)
-    gcode: GcodeSettings = field(default_factory=GcodeSettings)
-    hpgl: HpglSettings = field(default_factory=HpglSettings)
-    robot: RobotSettings | None = None
-    sim: SimSettings | None = None
-    limits: LimitSettings = field(default_factory=LimitSettings)
-    datasheets: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "formats", check_formats(self.formats))
-        check_ranges(self, EXPORT_RANGES)
-        check(isinstance(self.datasheets, Mapping), "datasheets", "must map robot names to limits")
-
-    def datasheet(self, robot: RobotSettings) -> JointLimits | None:
-        """The datasheet limits of ``robot`` (None if there are none)."""
-        node = self.datasheets.get(robot.name)
-        if node is None:
-            return None
-        from prg.errors import SettingsError
-
-        try:
-            return JointLimits.from_mapping(robot.arm_joints, node)
-        except SettingsError as err:
-            raise err.under(f"limits.joints.{robot.name}") from None
 
 
 @dataclass
