@@ -1,3 +1,5 @@
+"""Tests of ``prg.alphabet``."""
+
 import pytest
 
 from prg.alphabet import (

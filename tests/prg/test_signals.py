@@ -1,10 +1,10 @@
-"""All-or-nothing writes (prg.files) and signals held over the steps that must not be cut.
+"""Tests of ``prg.signals`` (moved from the suite on: all-or-nothing writes (prg.files) and signals
+held over the steps that must not be cut.
 
 A write is made to fail halfway for real: the kernel's file-size limit (RLIMIT_FSIZE) makes a
-write past it fail with EFBIG, the way a full disk fails with ENOSPC. Every writer of the project
-must then leave the previous file exactly as it was, no temporary file beside it, and an error
-that names the output the user asked for (not a hidden temporary name).
-"""
+write past it fail with EFBIG, the way a full disk fails with ENOSPC. Every writer of the
+project must then leave the previous file exactly as it was, no temporary file beside it, and an
+error that names the output the user asked for (not a hidden temporary name))."""
 
 from __future__ import annotations
 

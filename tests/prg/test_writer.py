@@ -1,4 +1,5 @@
-"""The README's Python snippet runs as written: the library path from a command to the robot."""
+"""Tests of ``prg.writer`` (moved from the suite on: the README's Python snippet runs as written:
+the library path from a command to the robot)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""Study designs: the YAML files, Latin-square positions, foils, lists A/B, attention checks."""
+"""Tests of ``studies.design`` (moved from the suite on: study designs: the YAML files, Latin-
+square positions, foils, lists A/B, attention checks)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,6 @@
-"""prg-study judge: a classifier two-sample test and a simulated observer on a built study; and a
-pilot's human words from held-out writers."""
+"""Tests of ``studies.judge`` (moved from the suite on: prg-study judge: a classifier two-sample
+test and a simulated observer on a built study; and a pilot's human words from held-out
+writers)."""
 
 from __future__ import annotations
 

@@ -1,7 +1,8 @@
-"""``python -m prg.commands.paper_scale`` (``make paper``): the whole path on the CPU with a tiny budget —
-four concurrent trainings and the classifiers, then the evaluation into its own folder — and its
+"""Tests of ``prg.commands.paper_scale`` (moved from the suite on: ``python -m
+prg.commands.paper_scale`` (``make paper``): the whole path on the CPU with a tiny budget — four
+concurrent trainings and the classifiers, then the evaluation into its own folder — and its
 failures: bad options (one line, exit 2, nothing started) and a training that fails (one line,
-exit 1, the other processes stopped)."""
+exit 1, the other processes stopped))."""
 
 from __future__ import annotations
 

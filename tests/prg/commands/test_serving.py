@@ -1,6 +1,7 @@
-"""Trained models as MLflow models (prg.serving): logged by every training run, loaded with
-``mlflow.pyfunc.load_model``, registered with metrics and a champion alias, and served over HTTP by
-the real ``mlflow models serve`` on loopback."""
+"""Tests of ``prg.commands.serving`` (moved from the suite on: trained models as MLflow models
+(prg.serving): logged by every training run, loaded with ``mlflow.pyfunc.load_model``,
+registered with metrics and a champion alias, and served over HTTP by the real ``mlflow models
+serve`` on loopback)."""
 
 from __future__ import annotations
 

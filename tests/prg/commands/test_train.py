@@ -1,4 +1,5 @@
-"""`prg-train`: MLflow records, checkpoints, resume, sweeps, bad input — real SQLite stores."""
+"""Tests of ``prg.commands.train`` (moved from the suite on: `prg-train`: MLflow records,
+checkpoints, resume, sweeps, bad input — real SQLite stores)."""
 
 import pytest
 import torch

@@ -1,4 +1,5 @@
-"""`prg-write`: text -> word.json/png/svg + DMP rollout + MLflow run; bad input gets one line."""
+"""Tests of ``prg.commands.write`` (moved from the suite on: `prg-write`: text -> word.json/png/svg
++ DMP rollout + MLflow run; bad input gets one line)."""
 
 import subprocess
 import wave

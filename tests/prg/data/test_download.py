@@ -1,4 +1,5 @@
-"""Tests of the atomic downloader and UJI fetching against a real HTTP server on loopback."""
+"""Tests of ``prg.data.download`` (moved from the suite on: tests of the atomic downloader and UJI
+fetching against a real HTTP server on loopback)."""
 
 from __future__ import annotations
 

@@ -1,3 +1,5 @@
+"""Tests of ``prg.data.splits``."""
+
 import pytest
 
 from prg.data.splits import split_writers

@@ -1,4 +1,5 @@
-"""The dataset build as a function: contents, writer-disjointness, reproducibility."""
+"""Tests of ``prg.data.store`` (moved from the suite on: the dataset build as a function: contents,
+writer-disjointness, reproducibility)."""
 
 import json
 

@@ -1,3 +1,5 @@
+"""Tests of ``prg.data.synthetic``."""
+
 import numpy as np
 import pytest
 

@@ -1,4 +1,5 @@
-"""The likeness table of generation modes and the style rates, on small known cases."""
+"""Tests of ``prg.evaluation.modes`` (moved from the suite on: the likeness table of generation
+modes and the style rates, on small known cases)."""
 
 from __future__ import annotations
 

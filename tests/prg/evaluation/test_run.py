@@ -1,5 +1,6 @@
-"""Report text of `prg-evaluate` from hand-made result rows: Table I's two trajectory
-conventions, exact and folded coherence, the smoothness section, the metric keys."""
+"""Tests of ``prg.evaluation.run`` (moved from the suite on: report text of `prg-evaluate` from
+hand-made result rows: Table I's two trajectory conventions, exact and folded coherence, the
+smoothness section, the metric keys)."""
 
 import math
 

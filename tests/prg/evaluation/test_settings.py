@@ -1,5 +1,6 @@
-"""`prg-evaluate`: Table I, coherence and robustness reports from real (tiny) trained models,
-written atomically, logged to a real SQLite MLflow store; bad input gets one line."""
+"""Tests of ``prg.evaluation.settings`` (moved from the suite on: `prg-evaluate`: Table I,
+coherence and robustness reports from real (tiny) trained models, written atomically, logged to
+a real SQLite MLflow store; bad input gets one line)."""
 
 import pytest
 

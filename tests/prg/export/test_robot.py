@@ -1,8 +1,8 @@
-"""A written word exported to real machines (prg.export, prg-export): every file is read back
-with another reader (gcodeparser, an HPGL parser written here, vpype's SVG reader, mcap-ros2's
-reader, numpy) and compared with what the word, its DMP timing and the simulated arm say
-independently; the joint-limit check slows a too-fast timing by the smallest factor and refuses
-what no slow-down fixes."""
+"""Tests of ``prg.export.robot`` (moved from the suite on: a written word exported to real machines
+(prg.export, prg-export): every file is read back with another reader (gcodeparser, an HPGL
+parser written here, vpype's SVG reader, mcap-ros2's reader, numpy) and compared with what the
+word, its DMP timing and the simulated arm say independently; the joint-limit check slows a too-
+fast timing by the smallest factor and refuses what no slow-down fixes)."""
 
 from __future__ import annotations
 

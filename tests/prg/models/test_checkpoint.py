@@ -1,5 +1,6 @@
-"""A checkpoint is data: opening one never runs code, and it may only name the project's models
-and torch's optimizers and schedulers to build."""
+"""Tests of ``prg.models.checkpoint`` (moved from the suite on: a checkpoint is data: opening one
+never runs code, and it may only name the project's models and torch's optimizers and schedulers
+to build)."""
 
 from __future__ import annotations
 

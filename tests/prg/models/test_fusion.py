@@ -1,9 +1,9 @@
-"""Gaussian algebra of prg.models.fusion against independent computations.
+"""Tests of ``prg.models.fusion`` (moved from the suite on: gaussian algebra of prg.models.fusion
+against independent computations.
 
 The product of experts is checked against a brute-force product of densities on a 1-D grid and
 against pairwise variance-form algebra (a different formula from the precision form the code
-uses); the KLs against ``torch.distributions.kl_divergence``.
-"""
+uses); the KLs against ``torch.distributions.kl_divergence``)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,7 @@
-"""The modality registry (prg.models.modalities): one record per modality, and every part that handles
-modalities reads it: the DataModule's batches, the test data, the classifiers' inputs, the
-networks, the likelihoods and the shape check of a prepared dataset."""
+"""Tests of ``prg.models.modalities`` (moved from the suite on: the modality registry
+(prg.models.modalities): one record per modality, and every part that handles modalities reads
+it: the DataModule's batches, the test data, the classifiers' inputs, the networks, the
+likelihoods and the shape check of a prepared dataset)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,8 @@
-"""The model families (CVAE, AVAE, MUSE), their appendix networks and the Lightning module.
+"""Tests of ``prg.models.muse`` (moved from the suite on: the model families (CVAE, AVAE, MUSE),
+their appendix networks and the Lightning module.
 
-Everything runs on tiny seeded in-memory batches, except the ``fast_dev_run`` checks which use the
-real :class:`~prg.data.datamodule.PRGDataModule` on the session's small prepared dataset.
-"""
+Everything runs on tiny seeded in-memory batches, except the ``fast_dev_run`` checks which use
+the real :class:`~prg.data.datamodule.PRGDataModule` on the session's small prepared dataset)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""Generate: per-letter decoding, input subsets per family, rest-to-rest timing, one DMP a word."""
+"""Tests of ``prg.pipeline.decode`` (moved from the suite on: generate: per-letter decoding, input
+subsets per family, rest-to-rest timing, one DMP a word)."""
 
 import logging
 

@@ -1,4 +1,5 @@
-"""Discrete DMP (prg.pipeline.dmp): reproduction, generalisation, exactness of the rollout, fit."""
+"""Tests of ``prg.pipeline.dmp`` (moved from the suite on: discrete DMP (prg.pipeline.dmp):
+reproduction, generalisation, exactness of the rollout, fit)."""
 
 from __future__ import annotations
 

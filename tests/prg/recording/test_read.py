@@ -1,4 +1,5 @@
-"""Rerun recordings: a written word with its inputs and animated DMP rollout, read back from disk."""
+"""Tests of ``prg.recording.read`` (moved from the suite on: rerun recordings: a written word with
+its inputs and animated DMP rollout, read back from disk)."""
 
 from __future__ import annotations
 

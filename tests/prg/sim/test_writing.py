@@ -1,5 +1,6 @@
-"""The simulated robot writes: accuracy, ink, lifts between words, workspace, IK, both arms,
-outputs, and the Rerun recording read back from disk."""
+"""Tests of ``prg.sim.writing`` (moved from the suite on: the simulated robot writes: accuracy,
+ink, lifts between words, workspace, IK, both arms, outputs, and the Rerun recording read back
+from disk)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,7 @@
-"""One MLflow run per command's work (``prg.tracking.task_run``), on a real SQLite store: its
-params, metrics and artifacts, and its status when the work completes, fails or is stopped;
-logged in the command's process or handed to a background logger (``background=True``)."""
+"""Tests of ``prg.tracking.task_runs`` (moved from the suite on: one MLflow run per command's work
+(``prg.tracking.task_run``), on a real SQLite store: its params, metrics and artifacts, and its
+status when the work completes, fails or is stopped; logged in the command's process or handed
+to a background logger (``background=True``))."""
 
 from __future__ import annotations
 

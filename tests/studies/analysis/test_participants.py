@@ -1,5 +1,6 @@
-"""Simulated participants with known truth: the simulator honours the truth it is given, and the
-analysis reaches the right conclusions from its responses."""
+"""Tests of ``studies.analysis.participants`` (moved from the suite on: simulated participants with
+known truth: the simulator honours the truth it is given, and the analysis reaches the right
+conclusions from its responses)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,6 @@
-"""`prg-study analyze | simulate`: the report folder (Markdown, self-contained HTML, tidy CSVs,
-figures), written atomically; bad input is one line with exit code 2."""
+"""Tests of ``studies.analysis.schema`` (moved from the suite on: `prg-study analyze | simulate`:
+the report folder (Markdown, self-contained HTML, tidy CSVs, figures), written atomically; bad
+input is one line with exit code 2)."""
 
 from __future__ import annotations
 

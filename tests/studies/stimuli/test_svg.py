@@ -1,4 +1,5 @@
-"""Stimuli: reading robot and human samples, and drawing every one of them alike."""
+"""Tests of ``studies.stimuli.svg`` (moved from the suite on: stimuli: reading robot and human
+samples, and drawing every one of them alike)."""
 
 from __future__ import annotations
 

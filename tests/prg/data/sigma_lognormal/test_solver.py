@@ -1,13 +1,13 @@
-"""The dataset build is the same on other machines (README, "Reproducibility").
+"""Tests of ``prg.data.sigma_lognormal.solver`` (moved from the suite on: the dataset build is the
+same on other machines (README, "Reproducibility").
 
 Each build runs in its own process, so the numeric libraries start with that environment:
 
 * bit for bit whatever the BLAS kernel (OpenBLAS picks Haswell, SkylakeX, ... by CPU;
-  ``OPENBLAS_CORETYPE`` forces one), its thread count and ``workers``: the build uses no BLAS
-  where a last-bit difference could change a fit;
-* within the stated tolerance across SIMD levels: numpy's exp, log, arctan2 and power have
-  AVX-512 variants; ``NPY_DISABLE_CPU_FEATURES`` turns them off, as on a CPU without AVX-512.
-"""
+``OPENBLAS_CORETYPE`` forces one), its thread count and ``workers``: the build uses no BLAS
+where a last-bit difference could change a fit; * within the stated tolerance across SIMD
+levels: numpy's exp, log, arctan2 and power have AVX-512 variants; ``NPY_DISABLE_CPU_FEATURES``
+turns them off, as on a CPU without AVX-512)."""
 
 from __future__ import annotations
 

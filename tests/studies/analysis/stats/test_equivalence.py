@@ -1,5 +1,6 @@
-"""studies.analysis statistics: each function against the scipy/statsmodels call it names, and the
-paper's numbers (shared/reference/studies.md) reproduced from the paper's summaries."""
+"""Tests of ``studies.analysis.stats.equivalence`` (moved from the suite on: studies.analysis
+statistics: each function against the scipy/statsmodels call it names, and the paper's numbers
+(shared/reference/studies.md) reproduced from the paper's summaries)."""
 
 from __future__ import annotations
 
