@@ -44,7 +44,7 @@ TINY = [
 ]
 
 
-def _run(cwd: Path, *args: str, timeout: int = 300) -> subprocess.CompletedProcess:
+def _run(cwd: Path, *args: str, timeout: int = 600) -> subprocess.CompletedProcess:
     env = {k: v for k, v in os.environ.items() if k != "MLFLOW_TRACKING_URI"}
     return subprocess.run(
         [sys.executable, "-m", "prg.commands.paper_scale", *args],
