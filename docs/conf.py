@@ -15,7 +15,7 @@ sys.path[:0] = [str(ROOT / "src"), str(ROOT)]
 
 project = "prg"
 author = "prg developers"
-copyright = "2026, prg developers"  # noqa: A001 (Sphinx's name)
+copyright = "2026, prg developers"
 
 extensions = [
     "myst_parser",
