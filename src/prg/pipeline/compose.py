@@ -19,6 +19,7 @@ from prg.checks import check_text_length
 from prg.errors import UsageError
 from prg.pipeline.connect import connect_sequence
 from prg.pipeline.dmp import basis_count, fit_dmp, rollout
+from prg.pipeline.joins import CLOSED_AT_TOP, closed_exit
 from prg.pipeline.layout import layout_letters, word_breaks
 from prg.pipeline.marks import crossed_exit, letter_marks
 from prg.pipeline.settings import (  # noqa: F401 (exported here too)
@@ -56,12 +57,14 @@ def compose_word(
     """
     params = params or GenerateSettings()
     placed = layout_letters(list(letters), text, params.layout)
+    chars = [c for c in text if c != " "]
     if params.delayed_strokes:  # the bar is its own stroke: a crossed letter ends at its foot
-        chars = [c for c in text if c != " "]
         placed = [
             crossed_exit(p) if params.marks.mark_of(c) == "bar" else p
             for c, p in zip(chars, placed)
         ]
+    if params.method == "hand":  # joined as a writer joins: an o is left where it closes
+        placed = [closed_exit(p) if c in CLOSED_AT_TOP else p for c, p in zip(chars, placed)]
     connections = connect_sequence(
         placed, params.connection, method=params.method, breaks=word_breaks(text)
     )

@@ -150,6 +150,45 @@ def _turning(path: np.ndarray) -> float:
     return float(np.abs(np.angle(np.exp(1j * np.diff(angle)))).sum())
 
 
+#: Letters a writer leaves from where they close, at the top (a cursive ``o``).
+CLOSED_AT_TOP = "o"
+#: The closure is the path's nearest return to its start in its second half, within this share
+#: of the letter's height; what follows is cut when it descends more than ``CLOSED_DROP``.
+CLOSED_NEAR = 0.35
+CLOSED_DROP = 0.25
+
+
+def closed_exit(points: np.ndarray) -> np.ndarray:
+    """An ``o`` cut where it closes, at its top: the writer leaves it there.
+
+    Some writers' ``o`` closes near its start, at the top, then goes down its right side into an
+    exit at mid-height; joined to the next letter, that descent reads as an ``a``'s stem (the
+    demo's robot wrote "joy" that read "jay"). When the path, in its second half, comes back to
+    within ``CLOSED_NEAR`` of the letter's height of its start and then descends by more than
+    ``CLOSED_DROP`` of it, the letter ends at that return; otherwise it is kept whole.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 2)
+        The letter, y up.
+
+    Returns
+    -------
+    ndarray, shape (m, 2), m <= n
+        A prefix of ``points``.
+    """
+    y = points[:, 1]
+    height = float(np.ptp(y))
+    half = len(points) // 2
+    if height <= 0 or half < 2:
+        return points
+    distance = np.linalg.norm(points[half:] - points[0], axis=1)
+    cut = half + int(np.argmin(distance))
+    near = distance.min() < CLOSED_NEAR * height
+    descends = y[cut:].min() < y[cut] - CLOSED_DROP * height
+    return points[: cut + 1] if near and descends else points
+
+
 def hand_connection(
     prev: np.ndarray,
     nxt: np.ndarray,

@@ -113,3 +113,48 @@ def test_the_turn_into_the_next_letter_follows_its_first_stroke():
     last = nxt[0] - result.points[-1]
     heading = math.degrees(math.atan2(last[1], last[0]))
     assert -150 < heading < -30  # coming down into the stem
+
+
+def _o_descending_after_closing():
+    """An o from its top right, round anticlockwise back up near its start, then down its right
+    side into a low exit (the shape that read as an a)."""
+    angle = np.linspace(0.5 * np.pi, 2.4 * np.pi, 60)
+    loop = np.column_stack([0.5 + 0.5 * np.cos(angle), 0.5 + 0.5 * np.sin(angle)])
+    tail = np.column_stack([np.linspace(loop[-1, 0], 1.3, 40), np.linspace(loop[-1, 1], 0.2, 40)])
+    return np.vstack([loop, tail[1:]])
+
+
+def test_an_o_that_descends_after_closing_is_left_at_its_top():
+    from prg.pipeline.joins import CLOSED_NEAR, closed_exit
+
+    o = _o_descending_after_closing()
+    cut = closed_exit(o)
+    assert len(cut) < len(o) and np.array_equal(cut, o[: len(cut)])
+    height = np.ptp(o[:, 1])
+    assert np.linalg.norm(cut[-1] - o[0]) < CLOSED_NEAR * height  # where it closes
+    assert cut[-1, 1] > o[:, 1].min() + 0.5 * height  # in its upper half, not at the exit
+
+
+def test_an_o_that_ends_where_it_closes_or_never_closes_is_kept_whole():
+    from prg.pipeline.joins import closed_exit
+
+    o = _o_descending_after_closing()
+    closes = o[:60]
+    assert np.array_equal(closed_exit(closes), closes)
+    angle = np.linspace(0.5 * np.pi, 1.6 * np.pi, 60)  # a c: never comes back to its start
+    c = np.column_stack([np.cos(angle), np.sin(angle)])
+    assert np.array_equal(closed_exit(c), c)
+
+
+def test_only_the_hand_method_leaves_an_o_at_its_top():
+    from prg.pipeline.compose import GenerateSettings, compose_word
+
+    o = _o_descending_after_closing()
+    o = np.array(
+        [np.interp(np.linspace(0, 1, 100), np.linspace(0, 1, len(o)), o[:, k]) for k in (0, 1)]
+    ).T
+    letters = np.stack([o, o])
+    hand = compose_word(letters, "oo", GenerateSettings(method="hand"))[0]
+    paper = compose_word(letters, "oo", GenerateSettings(method="alg1"))[0]
+    first = lambda word: word.points[word.segment == 0]  # noqa: E731
+    assert len(first(hand)) < len(first(paper)) == 100
