@@ -64,7 +64,11 @@ def compose_word(
             for c, p in zip(chars, placed)
         ]
     if params.method == "hand":  # joined as a writer joins: an o is left where it closes
-        placed = [closed_exit(p) if c in CLOSED_AT_TOP else p for c, p in zip(chars, placed)]
+        joined = [i + 1 < len(word) for word in text.split() for i in range(len(word))]
+        placed = [
+            closed_exit(p) if c in CLOSED_AT_TOP and to_next else p
+            for c, p, to_next in zip(chars, placed, joined)
+        ]
     connections = connect_sequence(
         placed, params.connection, method=params.method, breaks=word_breaks(text)
     )

@@ -165,7 +165,9 @@ def closed_exit(points: np.ndarray) -> np.ndarray:
     exit at mid-height; joined to the next letter, that descent reads as an ``a``'s stem (the
     demo's robot wrote "joy" that read "jay"). When the path, in its second half, comes back to
     within ``CLOSED_NEAR`` of the letter's height of its start and then descends by more than
-    ``CLOSED_DROP`` of it, the letter ends at that return; otherwise it is kept whole.
+    ``CLOSED_DROP`` of it, the letter ends at that return; otherwise it is kept whole. Only a letter
+    joined to the next one is cut (:func:`prg.pipeline.compose.compose_word`): a word's last o
+    keeps its flourish.
 
     Parameters
     ----------

@@ -157,4 +157,6 @@ def test_only_the_hand_method_leaves_an_o_at_its_top():
     hand = compose_word(letters, "oo", GenerateSettings(method="hand"))[0]
     paper = compose_word(letters, "oo", GenerateSettings(method="alg1"))[0]
     first = lambda word: word.points[word.segment == 0]  # noqa: E731
+    last = lambda word: word.points[word.segment == 2]  # noqa: E731
     assert len(first(hand)) < len(first(paper)) == 100
+    assert len(last(hand)) == len(last(paper)) == 100  # the word's last o keeps its exit
