@@ -58,20 +58,19 @@ def compose_word(
     params = params or GenerateSettings()
     placed = layout_letters(list(letters), text, params.layout)
     chars = [c for c in text if c != " "]
+    breaks = word_breaks(text)
     if params.delayed_strokes:  # the bar is its own stroke: a crossed letter ends at its foot
         placed = [
             crossed_exit(p) if params.marks.mark_of(c) == "bar" else p
             for c, p in zip(chars, placed)
         ]
     if params.method == "hand":  # joined as a writer joins: an o is left where it closes
-        joined = [i + 1 < len(word) for word in text.split() for i in range(len(word))]
+        joined = [not b for b in breaks] + [False]  # the word's last letter joins nothing
         placed = [
             closed_exit(p) if c in CLOSED_AT_TOP and to_next else p
             for c, p, to_next in zip(chars, placed, joined)
         ]
-    connections = connect_sequence(
-        placed, params.connection, method=params.method, breaks=word_breaks(text)
-    )
+    connections = connect_sequence(placed, params.connection, method=params.method, breaks=breaks)
     marks = (
         letter_marks(placed, text, params.marks, params.layout) if params.delayed_strokes else []
     )
