@@ -29,6 +29,7 @@ import logging
 import os
 import shutil
 import time
+from contextlib import AbstractContextManager, ExitStack, nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -43,6 +44,7 @@ from prg.commands.settings import build
 from prg.data.datamodule import PRGDataModule, read_manifest
 from prg.errors import PRGError, UsageError
 from prg.files import sha256_file, staged_outputs, write_json
+from prg.locks import folder_locks
 from prg.models.checkpoint import read_checkpoint
 from prg.models.module import PRGModule
 from prg.resources import git_commit
@@ -120,6 +122,23 @@ def _manifest(cfg: DictConfig) -> tuple[dict[str, Any], str]:
     return read_manifest(path.parent), sha256_file(path)
 
 
+# Set to a rank by torchrun, SLURM and Lightning's launchers for the processes of a DDP run.
+_RANK_VARIABLES = ("RANK", "LOCAL_RANK", "NODE_RANK", "SLURM_PROCID")
+
+
+def _lock_outputs(cfg: DictConfig) -> AbstractContextManager:
+    """Hold ``checkpoint_dir`` and ``export_dir`` for this run (:func:`prg.locks.folder_locks`):
+    another run given either is refused in one line naming this one, so two runs never mix
+    their checkpoints and exports. Only the first process of a DDP run (rank 0, the one that
+    writes them) holds them; the others share them."""
+    if any(os.environ.get(name, "0") != "0" for name in _RANK_VARIABLES):
+        return nullcontext()
+    folders = [(cfg.checkpoint_dir, "checkpoint_dir")]
+    if cfg.get("export_dir"):
+        folders.append((cfg.export_dir, "export_dir"))
+    return folder_locks(folders)
+
+
 def _resolve_ckpt_path(cfg: DictConfig) -> str | None:
     """``ckpt_path``, with ``last`` meaning ``${checkpoint_dir}/last.ckpt``, which must exist."""
     path = cfg.get("ckpt_path")
@@ -154,7 +173,8 @@ def train(cfg: DictConfig) -> TrainResult:
     # that from leaking into later runs of the same process (tests, notebooks, sweeps).
     saved = os.environ.get("MLFLOW_TRACKING_URI")
     try:
-        return _train(cfg)
+        with ExitStack() as held:  # the output folders' locks (_lock_outputs), until the end
+            return _train(cfg, held)
     finally:
         if saved is None:
             os.environ.pop("MLFLOW_TRACKING_URI", None)
@@ -162,7 +182,7 @@ def train(cfg: DictConfig) -> TrainResult:
             os.environ["MLFLOW_TRACKING_URI"] = saved
 
 
-def _train(cfg: DictConfig) -> TrainResult:
+def _train(cfg: DictConfig, held: ExitStack) -> TrainResult:
     check_values(cfg)
     train_settings(cfg)
     manifest, manifest_hash = _manifest(cfg)
@@ -178,6 +198,7 @@ def _train(cfg: DictConfig) -> TrainResult:
                 f"checkpoint {ckpt_path} holds a {family} model, not {cfg.model.name} "
                 f"({cfg.model.module.model._target_}): pass the matching model=..."
             )
+    held.enter_context(_lock_outputs(cfg))
     L.seed_everything(cfg.seed, workers=True)
 
     datamodule = build_datamodule(cfg)

@@ -32,12 +32,16 @@ Rules
 from __future__ import annotations
 
 import multiprocessing
+import os
 import signal
+import threading
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
+from contextlib import suppress
 from dataclasses import dataclass, field
+from multiprocessing.connection import Connection
 
 import numpy as np
 from tqdm.auto import tqdm
@@ -236,19 +240,43 @@ def _draw_chunk(
     return out, redraws, copies
 
 
-def _worker_init() -> None:
+def _worker_init(parent_alive=None) -> None:
     """Single-threaded BLAS in each worker: the small dense solves of the fit gain nothing from
     threads, and ``workers`` processes with a thread per core each oversubscribe the CPU (about
     1.4x slower measured on 2 cores). Uses threadpoolctl when it is installed.
 
     Ctrl-C reaches the whole process group: a worker ignores it, the main process stops the pool.
+
+    ``parent_alive``: the read end of a pipe whose only write end the main process holds
+    (:func:`_parent_watch`). A thread waits on it and ends the worker the moment the main
+    process is gone, however it died (``SIGKILL`` included, when nothing stops the pool): a
+    forkserver worker is not the main process's child, and without this it would hang for ever
+    on the result pipe, keeping the fork server and the resource tracker alive with it.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if parent_alive is not None:
+        threading.Thread(
+            target=_exit_when_closed, args=(parent_alive,), name="parent-watch", daemon=True
+        ).start()
     try:
         from threadpoolctl import threadpool_limits
     except ImportError:  # optional: without it the workers keep the default thread count
         return
     threadpool_limits(limits=1, user_api="blas")
+
+
+def _exit_when_closed(reader: Connection) -> None:
+    """Block until the pipe's write end is closed (nothing is ever sent), then end this process
+    at once: no cleanup that could wait on the dead parent."""
+    with suppress(EOFError, OSError):
+        reader.recv_bytes()
+    os._exit(1)
+
+
+def _parent_watch(context: multiprocessing.context.BaseContext) -> tuple[Connection, Connection]:
+    """A one-way pipe for :func:`_worker_init`: (read end for the workers, write end kept by this
+    process, closed only by its death or after the pool has ended)."""
+    return context.Pipe(duplex=False)
 
 
 def _stop_pool(pool: ProcessPoolExecutor) -> None:
@@ -371,13 +399,16 @@ def augment(
     classes = np.unique(labels)
     ranges = (float(amplitude), float(rotation_deg), float(sweep))
 
-    pool = (
-        ProcessPoolExecutor(
-            max_workers=workers, mp_context=_pool_context(), initializer=_worker_init
+    pool, watch = None, None
+    if workers > 1 and n_in > 0:
+        context = _pool_context()
+        watch = _parent_watch(context)
+        pool = ProcessPoolExecutor(
+            max_workers=workers,
+            mp_context=context,
+            initializer=_worker_init,
+            initargs=(watch[0],),
         )
-        if workers > 1 and n_in > 0
-        else None
-    )
     try:
         start = time.perf_counter()
         starts = list(range(0, n_in, _CHUNK))
@@ -435,6 +466,9 @@ def augment(
     else:
         if pool is not None:
             pool.shutdown(wait=True)
+    finally:
+        for end in watch or ():
+            end.close()
 
     redraws = copies = 0
     lo = 0
