@@ -120,9 +120,11 @@ ALPHA_MAX_DEG = Range(0, 180, low_open=True)  # connection.alpha_max_deg: a turn
 IMAGE_SHIFT = count(0, 8)  # whole pixels of a 28 x 28 image
 N_TEST = count(1, optional=True)  # test samples (null: all)
 
-# ---- the options of prg-export whose settings classes check them against these constants ----
+# ---- options of prg-export and prg-simulate whose settings classes use these constants ----
 SCALE = positive(1000)  # the word's size relative to its own: prg-simulate, prg-export (plotter)
 TEMPO = positive(10)  # multiplies the DMP's duration: prg-simulate, prg-export
+WORKSPACE_STEP_CM = positive(100)  # prg-simulate: the reachability grid (SimSettings)
+WORD_CENTRE_CM = Range(-1000, 1000)  # paper.word_centre_cm: each coordinate (SimSettings)
 SAMPLE_DT_S = Range(0, 0.1, low_open=True)  # prg-export: the G-code's rollout step (s)
 PAPER_MM = positive(10_000)  # plotter.paper_mm: each of the sheet's two sizes
 POSITION_MM = Range(-10_000, 10_000, optional=True)  # plotter.position_mm: each coordinate
@@ -142,6 +144,12 @@ DECLARED: dict[str, tuple[str, str]] = {  # config node -> (module, settings cla
     "gcode": ("prg.export.settings", "GcodeSettings"),
     "hpgl": ("prg.export.settings", "HpglSettings"),
     "limits": ("prg.export.settings", "LimitSettings"),
+    "paper": ("prg.sim.settings", "Paper"),
+    "motion": ("prg.sim.settings", "MotionSettings"),
+    "control": ("prg.sim.settings", "ControlSettings"),
+    "ik": ("prg.sim.settings", "IKSettings"),
+    "camera": ("prg.sim.settings", "Camera"),
+    "robot": ("prg.sim.settings", "RobotSettings"),
 }
 
 # ---- every other numeric option of conf/ (prepare, train, evaluate, write, dictaphone, ...) ----
@@ -237,44 +245,12 @@ TABLE: dict[str, Range] = {
     "speech.noise_subtraction": Range(0, 10),
     # prg-dictaphone
     "speed": Range(10, 1000),  # espeak-ng words per minute
-    # prg-simulate
+    # prg-simulate (its settings classes declare the rest; SimSettings declares these with
+    # these constants: top-level keys, as seed, and the word's centre, given under paper)
     "scale": SCALE,
     "tempo": TEMPO,
-    "workspace_step_cm": positive(100),
-    "paper.size_cm": positive(1000),
-    "paper.centre": METRES,
-    "paper.yaw_deg": DEGREES,
-    "paper.thickness_m": positive(0.1),
-    "paper.word_centre_cm": Range(-1000, 1000),
-    "motion.lift_cm": positive(100),
-    "motion.approach_s": positive(60),
-    "motion.lower_s": positive(60),
-    "motion.lift_s": positive(60),
-    "motion.dwell_s": non_negative(60),
-    "control.time_step": positive(0.05),
-    "control.steps_per_waypoint": count(1, 1000),
-    "control.position_gain": positive(100),
-    "control.velocity_gain": positive(100),
-    "control.contact_band_mm": positive(100),
-    "control.settle_s": non_negative(60),
-    "ik.null_space_iterations": count(1, 100_000),
-    "ik.refine_iterations": count(1, 100_000),
-    "ik.cold_iterations": count(1, 100_000),
-    "ik.residual": positive(1),
-    "ik.tolerance_mm": positive(1000),
-    "camera.width": count(1, 8192),
-    "camera.height": count(1, 8192),
-    "camera.distance": Range(0, 100, low_open=True, optional=True),
-    "camera.yaw": DEGREES,
-    "camera.pitch": DEGREES,
-    "camera.fov": Range(0, 180, low_open=True, high_open=True),
-    "robot.rest_pose": METRES,  # radians (or metres for a sliding joint)
-    "robot.held_joints.*": METRES,
-    "robot.pen_offset": METRES,
-    "robot.pen_length": positive(10),
-    "robot.pen_radius": positive(1),
-    "robot.base_position": METRES,
-    "robot.base_yaw_deg": DEGREES,
+    "workspace_step_cm": WORKSPACE_STEP_CM,
+    "paper.word_centre_cm": WORD_CENTRE_CM,
     # prg-export (its settings classes declare the rest; ExportSettings declares sample_dt_s and
     # tempo, PlotterSettings checks scale, with these constants: top-level keys, as seed; and
     # the options holding two numbers, which the classes check item by item: PlotterSettings

@@ -8,14 +8,16 @@ checks each field as the field declares it:
   dataclass refuses a value outside it (``impute_steps must be an integer in [0, 1000], got
   -1``) and :data:`prg.checks.RANGES` takes the config option's entry from the same declaration
   (:func:`declared_ranges`; ``generate.impute_steps``), so the settings class and the config
-  check cannot drift apart;
+  check cannot drift apart; a field of several numbers declares the range of each
+  (``ranged(..., items=2)``: ``paper.size_cm``; ``keyed=True``: ``robot.held_joints.*``);
 * :func:`checked` declares a check-and-convert function (the converted value is stored).
 
 Classes not yet declaring their fields use the one-field checks below (:func:`positive`,
 :func:`at_least`, :func:`vector` ...) or :func:`check_ranges` with a table of
 :mod:`prg.checks`. This module imports no numpy, so that the settings classes that declare their
 ranges can be read by the config check before any heavy library is loaded. An error
-names the field as the dataclass spells it (``lift_cm must be a positive number, got 0``); whoever
+names the field as the dataclass spells it (``lift_cm must be a finite number in (0, 100], got
+0``); whoever
 read the value from a config tree adds its path with :meth:`~prg.errors.SettingsError.under`
 (``motion.lift_cm ...``). :class:`FromMapping` gives a settings dataclass ``from_mapping``: its
 fields from a plain mapping (a YAML node), unknown keys refused, lists taken as tuples.
@@ -87,10 +89,17 @@ def checked(default: Any, check: Callable[..., Any], **options: Any) -> Any:
     )
 
 
-def ranged(default: Any, spec: Range) -> Any:
+def ranged(default: Any, spec: Range, *, items: bool | int = False, keyed: bool = False) -> Any:
     """A dataclass field with ``default`` that accepts the numbers of ``spec`` (a
     :class:`prg.checks.Range`): :func:`check_fields` refuses any other value, and
     :func:`declared_ranges` gives ``spec`` to the config check (:data:`prg.checks.RANGES`).
+
+    A field holding several numbers, each in ``spec``: ``items=True`` a sequence of any length,
+    ``items=N`` of exactly ``N`` (stored as a tuple; the config check takes each item of the
+    option's list), ``keyed=True`` a mapping of names to numbers (stored as a dict with ``str``
+    keys; the config option is ``NODE.FIELD.*``). ``default`` may be
+    :data:`dataclasses.MISSING` (a field the caller must give); a keyed field's default is a
+    mapping, copied for each instance.
 
     Examples
     --------
@@ -108,7 +117,10 @@ def ranged(default: Any, spec: Range) -> Any:
     >>> declared_ranges(Steps, "walk") == {"walk.steps": count(0, 1000)}
     True
     """
-    return dataclasses.field(default=default, metadata={"range": spec})
+    metadata = {"range": spec, "items": items, "keyed": keyed}
+    if keyed and default is not dataclasses.MISSING:
+        return dataclasses.field(default_factory=lambda: dict(default), metadata=metadata)
+    return dataclasses.field(default=default, metadata=metadata)
 
 
 def check_fields(settings: Any) -> None:
@@ -124,16 +136,77 @@ def check_fields(settings: Any) -> None:
             value = check(getattr(settings, field.name), field.name)
             object.__setattr__(settings, field.name, value)
         spec = field.metadata.get("range")
-        if spec is not None:
-            require_number(getattr(settings, field.name), field.name, spec)
+        if spec is None:
+            continue
+        value = getattr(settings, field.name)
+        items, keyed = field.metadata.get("items", False), field.metadata.get("keyed", False)
+        if keyed:
+            object.__setattr__(settings, field.name, _keyed(value, field.name, spec))
+        elif items is not False:
+            size = None if items is True else items
+            object.__setattr__(settings, field.name, _items(value, field.name, spec, size))
+        else:
+            require_number(value, field.name, spec)
+
+
+def _item(value: Any, spec: Range) -> Any:
+    """One number of a several-number field as :class:`~prg.checks.Range` reads it (a numpy
+    scalar as an ``int`` or a ``float``), or None when ``spec`` does not accept it."""
+    if isinstance(value, numbers.Integral) and not isinstance(value, bool):
+        value = int(value)
+    elif isinstance(value, numbers.Real) and not isinstance(value, bool):
+        value = float(value)
+    if value is None or not spec.accepts(value):
+        return None
+    return value if spec.integer else float(value)
+
+
+def _items(value: Any, field: str, spec: Range, size: int | None) -> tuple:
+    """``value`` as a tuple of ``size`` (any number when None) numbers, each in ``spec``; a
+    refused item is named as the config check names it (``size_cm[0] must be ...``)."""
+    from prg.checks import _short
+
+    count = "a list of numbers" if size is None else f"a list of {size} numbers"
+    given: tuple | None = None
+    if not isinstance(value, str | bytes | Mapping):
+        try:
+            given = tuple(value)
+        except TypeError:
+            given = None
+    if given is None or (size is not None and len(given) != size):
+        raise SettingsError(field, f"must be {count}, got {_short(value)}")
+    checked_items = []
+    for i, item in enumerate(given):
+        checked_item = _item(item, spec)
+        if checked_item is None:
+            raise SettingsError(f"{field}[{i}]", f"must be {spec.describe()}, got {_short(item)}")
+        checked_items.append(checked_item)
+    return tuple(checked_items)
+
+
+def _keyed(value: Any, field: str, spec: Range) -> dict[str, Any]:
+    """``value`` (None: empty) as a dict of names to numbers, each in ``spec``."""
+    from prg.checks import _short
+
+    value = {} if value is None else value
+    if not isinstance(value, Mapping):
+        raise SettingsError(field, f"must map names to numbers, got {_short(value)}")
+    out = {}
+    for key, item in value.items():
+        checked_item = _item(item, spec)
+        if checked_item is None:
+            raise SettingsError(f"{field}.{key}", f"must be {spec.describe()}, got {_short(item)}")
+        out[str(key)] = checked_item
+    return out
 
 
 def declared_ranges(settings_class: type, prefix: str = "") -> dict[str, Range]:
     """The :func:`ranged` fields of a settings dataclass, field name to range, each name after
-    ``prefix`` and a dot when a prefix is given (the config node that holds the fields)."""
+    ``prefix`` and a dot when a prefix is given (the config node that holds the fields); a keyed
+    field's name ends in ``.*`` (one option per key)."""
     start = f"{prefix}." if prefix else ""
     return {
-        f"{start}{field.name}": field.metadata["range"]
+        f"{start}{field.name}{'.*' if field.metadata.get('keyed') else ''}": field.metadata["range"]
         for field in dataclasses.fields(settings_class)
         if "range" in field.metadata
     }

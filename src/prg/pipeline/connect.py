@@ -42,8 +42,8 @@ synthetic test split: with neither, 43 of 200 connections ran out of steps, orbi
   the four-term cost shapes the path; near it, the pen aims. Homing never switches back off.
 
 With both, no connection of the 300 needs the fallback below; ``home_radius = 0`` gives the
-unmodified candidate competition (an argument of :func:`connect_letters`; the command's
-:class:`ConnectionSettings` takes the config's range, ``home_radius > 0``).
+unmodified candidate competition (``connection.home_radius=0``: :func:`connect_letters` and the
+command accept the same values, those :class:`ConnectionSettings` declares).
 
 Every point of letter ``i + 1`` is still written, in order
 -----------------------------------------------------------
@@ -93,62 +93,10 @@ from typing import Literal
 
 import numpy as np
 
-from prg.errors import SettingsError, UsageError
-from prg.pipeline.settings import JOIN_MODES, ConnectionSettings, JoinMode  # exported here too
+from prg.errors import UsageError
+from prg.pipeline.settings import ConnectionSettings, JoinMode  # exported here too
 
 _TINY = 1e-12
-_WEIGHTS = ("theta_o", "theta_a", "theta_f", "theta_p", "home_radius")  # by _check_weight
-
-
-def _as_float(value) -> float | None:
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        return None
-
-
-def _check_positive(value, name: str) -> float:
-    v = _as_float(value)
-    if v is None or not (math.isfinite(v) and v > 0):
-        raise SettingsError(name, f"must be a positive finite number, got {value!r}")
-    return v
-
-
-def _check_weight(value, name: str) -> float:
-    v = _as_float(value)
-    if v is None or not (math.isfinite(v) and v >= 0):
-        raise SettingsError(name, f"must be a non-negative finite number, got {value!r}")
-    return v
-
-
-def _check_count(value, name: str) -> int:
-    try:
-        ok = not isinstance(value, bool) and int(value) == value and value >= 0
-    except (TypeError, ValueError, OverflowError):
-        ok = False
-    if not ok:
-        raise SettingsError(name, f"must be a non-negative integer, got {value!r}")
-    return int(value)
-
-
-def _check_arguments(
-    delta, alpha_max, theta_o, theta_a, theta_f, theta_p, home_radius, max_steps, join
-) -> tuple:
-    """The parameters of :func:`connect_letters` checked, lengths and weights as floats and
-    ``max_steps`` as an int. Wider than :class:`ConnectionSettings` (the config's ranges): no
-    upper bounds, ``home_radius = 0`` (no homing) and ``max_steps = 0`` (the straight joiner)."""
-    delta = _check_positive(delta, "delta")
-    alpha_max = _check_positive(alpha_max, "alpha_max")
-    if alpha_max > math.pi:
-        raise SettingsError("alpha_max", f"must be in (0, pi] radians, got {alpha_max!r}")
-    values = (theta_o, theta_a, theta_f, theta_p, home_radius)
-    weights = tuple(_check_weight(v, name) for v, name in zip(values, _WEIGHTS, strict=True))
-    max_steps = _check_count(max_steps, "max_steps")
-    if join not in JOIN_MODES:
-        raise SettingsError("join", f"must be one of {', '.join(JOIN_MODES)}, got {join!r}")
-    return (delta, alpha_max, *weights, max_steps, join)
-
-
 _DEFAULT = ConnectionSettings()
 
 
@@ -240,7 +188,7 @@ def straight_connection(prev, nxt, delta: float = _DEFAULT.delta) -> ConnectionR
     """
     prev = _check_points(prev, "prev")
     nxt = _check_points(nxt, "nxt")
-    delta = _check_positive(delta, "delta")
+    delta = ConnectionSettings(delta=delta).delta
     return ConnectionResult(subdivide(prev[-1], nxt[0], delta), 0, 0, False)
 
 
@@ -296,15 +244,27 @@ def connect_letters(
     Raises
     ------
     UsageError
-        A malformed array or an out-of-range parameter (:class:`~prg.errors.SettingsError`),
-        named.
+        A malformed array or a parameter :class:`ConnectionSettings` refuses (a
+        :class:`~prg.errors.SettingsError` naming it): the function accepts what the config
+        accepts, ``home_radius = 0`` (no homing) and ``max_steps = 0`` (the straight joiner)
+        included.
     """
     prev = _check_points(prev, "prev")
     nxt = _check_points(nxt, "nxt")
-    delta, alpha_max, theta_o, theta_a, theta_f, theta_p, home_radius, max_steps, join = (
-        _check_arguments(
-            delta, alpha_max, theta_o, theta_a, theta_f, theta_p, home_radius, max_steps, join
-        )
+    params = ConnectionSettings(  # the parameters' one check: the config's ranges
+        delta, alpha_max, theta_o, theta_a, theta_f, theta_p, home_radius, max_steps, join
+    )
+    delta, alpha_max, theta_o, theta_a = (
+        params.delta,
+        params.alpha_max,
+        params.theta_o,
+        params.theta_a,
+    )
+    theta_f, theta_p, home_radius, max_steps = (
+        params.theta_f,
+        params.theta_p,
+        params.home_radius,
+        params.max_steps,
     )
 
     start, first = prev[-1], nxt[0]

@@ -137,9 +137,11 @@ class ConnectionSettings:
         nearest part of the next letter).
     home_radius : float
         Distance to the next letter's first point below which the pen aims at that point alone
-        (0.4 cm, 2.5 turning radii; :mod:`prg.pipeline.connect`).
+        (0.4 cm, 2.5 turning radii; :mod:`prg.pipeline.connect`); 0: no homing (the paper's
+        unmodified candidate competition).
     max_steps : int
-        Cap on steered steps before the straight fallback (400 steps = 20 cm of path).
+        Cap on steered steps before the straight fallback (400 steps = 20 cm of path); 0: the
+        straight joiner.
     join : {"first", "retrace"}
         How the connection enters the next letter (:mod:`prg.pipeline.connect`).
 
@@ -152,9 +154,9 @@ class ConnectionSettings:
     The settings accept what the config accepts (``connection.*`` of :data:`prg.checks.RANGES`,
     taken from these fields; ``alpha_max`` in (0, pi] radians, the config's ``alpha_max_deg`` in
     (0, 180]); a refused value raises :class:`~prg.errors.SettingsError` naming its field.
-    :func:`~prg.pipeline.connect.connect_letters` itself takes more: ``home_radius = 0`` (no
-    homing) and ``max_steps = 0`` (the straight joiner). The lengths and weights are stored as
-    ``float``.
+    :func:`~prg.pipeline.connect.connect_letters` checks its arguments with this class, so the
+    function, the settings and the command accept the same values. The lengths and weights are
+    stored as ``float``.
     """
 
     delta: float = ranged(0.05, positive(10))
@@ -163,8 +165,8 @@ class ConnectionSettings:
     theta_a: float = ranged(1.0, non_negative(WEIGHT_MAX))
     theta_f: float = ranged(4.0, non_negative(WEIGHT_MAX))
     theta_p: float = ranged(0.5, non_negative(WEIGHT_MAX))
-    home_radius: float = ranged(0.4, positive(100))
-    max_steps: int = ranged(400, count(1, 100_000))
+    home_radius: float = ranged(0.4, non_negative(100))
+    max_steps: int = ranged(400, count(0, 100_000))
     join: JoinMode = "first"
 
     def __post_init__(self) -> None:

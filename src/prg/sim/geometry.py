@@ -25,14 +25,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from prg.errors import UsageError
-from prg.fields import FromMapping, as_float, check, positive_float, vector
 from prg.pipeline.motion import arc_length, arc_progress, pen_down_samples  # re-exported
+from prg.sim.settings import Paper  # re-exported: the paper frame
 
 __all__ = [
     "Paper",
@@ -49,87 +48,6 @@ __all__ = [
 ]
 
 _Float = NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class Paper(FromMapping):
-    """A sheet on the table: size and pose (the defaults are ``conf/simulate.yaml``'s).
-
-    Attributes
-    ----------
-    size_cm : tuple of float
-        Width (along the paper's x, the writing line) and height, in cm (A3 landscape).
-    centre : tuple of float
-        Centre of the top surface in the world (m).
-    yaw_deg : float
-        Heading of the paper's x axis in the world (degrees about z; ``-90``: x along world
-        ``-y``, so a robot at the origin facing ``+x`` writes left to right as it sees it).
-    thickness_m : float
-        Thickness of the sheet (m); it lies on the table, its top surface at ``centre[2]``.
-    """
-
-    size_cm: tuple[float, float] = (42.0, 29.7)
-    centre: tuple[float, float, float] = (0.55, 0.0, 0.6255)
-    yaw_deg: float = -90.0
-    thickness_m: float = 0.0005
-
-    def __post_init__(self) -> None:
-        problem = "must be two positive numbers"
-        size = vector(self.size_cm, "size_cm", 2, problem)
-        check(min(size) > 0, "size_cm", f"{problem}, got {self.size_cm!r}")
-        centre = vector(self.centre, "centre", 3, "must be three numbers (m)")
-        yaw = as_float(self.yaw_deg, "yaw_deg")
-        check(math.isfinite(yaw), "yaw_deg", f"must be a number, got {yaw!r}")
-        thickness = positive_float(self.thickness_m, "thickness_m")
-        for name, value in (
-            ("size_cm", size),
-            ("centre", centre),
-            ("yaw_deg", yaw),
-            ("thickness_m", thickness),
-        ):
-            object.__setattr__(self, name, value)
-
-    @property
-    def rotation(self) -> _Float:
-        """World-from-paper rotation, shape (3, 3): columns are the paper's axes in the world."""
-        c, s = math.cos(math.radians(self.yaw_deg)), math.sin(math.radians(self.yaw_deg))
-        return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-    @property
-    def quaternion(self) -> tuple[float, float, float, float]:
-        """World-from-paper orientation (x, y, z, w)."""
-        half = math.radians(self.yaw_deg) / 2
-        return (0.0, 0.0, math.sin(half), math.cos(half))
-
-    def to_world(self, points_cm: ArrayLike) -> _Float:
-        """Paper-frame points (cm) to world points (m).
-
-        Parameters
-        ----------
-        points_cm : array_like, shape (n, 2) or (n, 3)
-            ``(x, y)`` on the paper or ``(x, y, height)`` above it, in cm.
-
-        Returns
-        -------
-        ndarray, shape (n, 3)
-        """
-        pts = np.asarray(points_cm, dtype=np.float64)
-        if pts.ndim != 2 or pts.shape[1] not in (2, 3):
-            raise UsageError(f"points must have shape (n, 2) or (n, 3), got {pts.shape}")
-        if pts.shape[1] == 2:
-            pts = np.column_stack([pts, np.zeros(len(pts))])
-        return pts / 100.0 @ self.rotation.T + np.asarray(self.centre)
-
-    def to_paper(self, points_m: ArrayLike) -> _Float:
-        """World points (m) to paper-frame ``(x, y, height)`` in cm, shape (n, 3)."""
-        pts = np.asarray(points_m, dtype=np.float64).reshape(-1, 3)
-        return (pts - np.asarray(self.centre)) @ self.rotation * 100.0
-
-    def contains(self, points_cm: ArrayLike, margin_cm: float = 0.0) -> NDArray[np.bool_]:
-        """Whether each ``(x, y)`` lies on the sheet, at least ``margin_cm`` from its edges."""
-        pts = np.asarray(points_cm, dtype=np.float64)[:, :2]
-        half = np.asarray(self.size_cm) / 2 - margin_cm
-        return np.all(np.abs(pts) <= half, axis=1)
 
 
 # ----------------------------------------------------------------------------- paths

@@ -11,16 +11,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from prg.errors import UsageError
-from prg.fields import FromMapping, check, positive, positive_integer
 from prg.sim.bullet import flange_pose, load_robot, pen_tip, pybullet, rotate
 from prg.sim.robots import RobotSettings
+from prg.sim.settings import IK_METHODS, IKSettings  # re-exported
 
 __all__ = [
     "IK_METHODS",
@@ -41,52 +40,8 @@ def pen_down(yaw: float) -> tuple[float, float, float, float]:
     return (math.cos(yaw / 2), math.sin(yaw / 2), 0.0, 0.0)
 
 
-IK_METHODS = ("refined", "null_space", "plain")
-
-
 class UnreachableError(UsageError):
     """An IK target the arm cannot reach with the pen vertical (names the point)."""
-
-
-@dataclass(frozen=True)
-class IKSettings(FromMapping):
-    """Inverse kinematics: null-space IK for posture, refined by a plain IK solve seeded from it.
-
-    Attributes
-    ----------
-    null_space_iterations : int
-        Iterations of the null-space solve (rest pose, joint limits and ranges) when seeded
-        with the previous waypoint's solution.
-    refine_iterations : int
-        Iterations of the plain (damped least squares) refinement seeded from it.
-    cold_iterations : int
-        Iterations of both solves when starting from the rest pose (the first waypoint, the
-        workspace map's nodes): far targets need more.
-    residual : float
-        Residual threshold of both solves (m).
-    tolerance_mm : float
-        Largest pen-tip error of a solution (mm); above it, or outside the joint limits, the
-        target is unreachable.
-    method : str
-        ``"refined"``: the null-space solve, then the plain solve seeded from it (default);
-        ``"null_space"``: the null-space solve alone; ``"plain"``: the plain solve alone, seeded
-        with the previous solution (no rest pose, no limits). The last two are the references
-        ``benchmarks/bench_simulate.py`` compares with.
-    """
-
-    null_space_iterations: int = 20
-    refine_iterations: int = 100
-    cold_iterations: int = 100
-    residual: float = 1e-7
-    tolerance_mm: float = 0.5
-    method: str = "refined"
-
-    def __post_init__(self) -> None:
-        check(
-            self.method in IK_METHODS, "method", f"{self.method!r}: choose {', '.join(IK_METHODS)}"
-        )
-        positive_integer(self, "null_space_iterations", "refine_iterations", "cold_iterations")
-        positive(self, "residual", "tolerance_mm")
 
 
 class IKSolver:

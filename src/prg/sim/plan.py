@@ -23,41 +23,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from prg.errors import UsageError
-from prg.fields import FromMapping, at_least, positive
 from prg.pipeline.timing import min_jerk
 from prg.sim.geometry import runs
+from prg.sim.settings import MotionSettings  # re-exported
 
 __all__ = ["PHASES", "MotionPlan", "MotionSettings", "plan_motion"]
 
 PHASES = ("approach", "lower", "dwell", "write", "lift", "travel", "retreat")
 """Phase names; :attr:`MotionPlan.phase` holds indices into this tuple."""
-
-
-@dataclass(frozen=True)
-class MotionSettings(FromMapping):
-    """Durations and heights of the pen's moves around the writing.
-
-    Attributes
-    ----------
-    lift_cm : float
-        Height of the pen tip above the paper when it is up (approach, travel between words).
-    approach_s : float
-        Duration of the approach from home and of the retreat back.
-    lower_s, lift_s : float
-        Duration of lowering the pen onto the paper and lifting it off.
-    dwell_s : float
-        Time the pen rests on the paper before a stroke starts.
-    """
-
-    lift_cm: float = 1.5
-    approach_s: float = 2.0
-    lower_s: float = 0.6
-    lift_s: float = 0.6
-    dwell_s: float = 0.2
-
-    def __post_init__(self) -> None:
-        positive(self, "lift_cm", "approach_s", "lower_s", "lift_s", what="a positive number")
-        at_least(self, "dwell_s", 0.0)
 
 
 @dataclass(frozen=True)

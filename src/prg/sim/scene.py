@@ -15,11 +15,9 @@ display needed). The pen is a visual-only cylinder that follows the flange
 from __future__ import annotations
 
 import logging
-import math
 import os
 import sys
 import tempfile
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -27,66 +25,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from prg.errors import PRGError, UsageError
-from prg.fields import FromMapping, as_float, check, positive
 from prg.sim.bullet import flange_pose, load_robot, pen_tip, pybullet, rotate
-from prg.sim.geometry import Paper
 from prg.sim.robots import RobotSettings, pybullet_data_path
+from prg.sim.settings import Camera, Paper  # Camera re-exported
 
 log = logging.getLogger(__name__)
 
 __all__ = ["TABLE_TOP_Z", "Camera", "Scene", "pybullet"]
 
 TABLE_TOP_Z = 0.625  # pybullet_data/table/table.urdf: a 5 cm top centred at z = 0.6
-
-
-@dataclass(frozen=True)
-class Camera(FromMapping):
-    """A TinyRenderer camera looking down at the paper.
-
-    The default looks straight down at the word, the page upright in the picture (its top edge,
-    away from the robot, at the top), from as close as frames the word with a margin.
-
-    Attributes
-    ----------
-    width, height : int
-        Image size (pixels).
-    distance : float or None
-        From the target (m); None: frame the word (:meth:`framing_distance`). 0.5 shows the
-        whole default sheet.
-    yaw, pitch : float
-        Degrees (PyBullet's ``computeViewMatrixFromYawPitchRoll`` convention).
-    fov : float
-        Vertical field of view (degrees).
-    """
-
-    width: int = 1024
-    height: int = 768
-    distance: float | None = None
-    yaw: float = -90.0
-    pitch: float = -89.0
-    fov: float = 45.0
-
-    def __post_init__(self) -> None:
-        for name in ("width", "height"):
-            value = as_float(getattr(self, name), name)
-            ok = math.isfinite(value) and value.is_integer() and 16 <= value <= 8192
-            check(ok, name, "must be a whole number of pixels in [16, 8192]")
-        if self.distance is not None:
-            positive(self, "distance", what="positive (m) or null")
-        as_float(self.yaw, "yaw")
-        as_float(self.pitch, "pitch")
-        fov = as_float(self.fov, "fov")
-        check(1.0 <= fov <= 170.0, "fov", f"must be in [1, 170] degrees, got {self.fov!r}")
-
-    def framing_distance(
-        self, extent_m: ArrayLike, margin: float = 1.4, least: float = 0.08
-    ) -> float:
-        """Distance at which a region ``extent_m`` = (width, height) fills the picture, times
-        ``margin``, and at least ``least`` m wide."""
-        half_v = math.radians(self.fov) / 2
-        half_h = math.atan(math.tan(half_v) * self.width / self.height)
-        w, h = np.maximum(np.asarray(extent_m, dtype=np.float64) * margin, least) / 2
-        return float(max(w / math.tan(half_h), h / math.tan(half_v)))
 
 
 class Scene:

@@ -189,11 +189,12 @@ def test_connect_letters_is_deterministic():
         ({"prev": np.zeros((3, 3))}, "prev must have shape"),
         ({"nxt": np.zeros((0, 2))}, "nxt must have shape"),
         ({"prev": np.array([[0.0, np.nan]])}, "prev contains NaN"),
-        ({"delta": 0.0}, "delta must be a positive"),
+        ({"delta": 0.0}, r"delta must be a finite number in \(0, 10\]"),
         ({"alpha_max": 4.0}, "alpha_max must be in"),
-        ({"theta_a": -1.0}, "theta_a must be a non-negative"),
+        ({"theta_a": -1.0}, r"theta_a must be a finite number in \[0, "),
         ({"home_radius": math.inf}, "home_radius must be"),
-        ({"max_steps": 2.5}, "max_steps must be a non-negative integer"),
+        ({"max_steps": 2.5}, r"max_steps must be an integer in \[0, 100,000\]"),
+        ({"home_radius": -0.1}, r"home_radius must be a finite number in \[0, 100\]"),
         ({"join": "middle"}, "join must be one of"),
     ],
 )
@@ -229,9 +230,9 @@ def test_connection_settings_hold_floats_and_an_integer_step_count():
 @pytest.mark.parametrize(
     ("field", "value", "message"),
     [
-        ("max_steps", 0, "an integer in [1, 100,000], got 0"),
-        ("max_steps", 10.0, "an integer in [1, 100,000], got 10.0"),
-        ("home_radius", 0.0, "a finite number in (0, 100], got 0.0"),
+        ("max_steps", -1, "an integer in [0, 100,000], got -1"),
+        ("max_steps", 10.0, "an integer in [0, 100,000], got 10.0"),
+        ("home_radius", -0.5, "a finite number in [0, 100], got -0.5"),
         ("delta", 11.0, "a finite number in (0, 10], got 11.0"),
         ("theta_a", 2e6, "a finite number in [0, 1,000,000], got 2000000.0"),
     ],
@@ -255,10 +256,19 @@ def test_alpha_max_takes_the_range_of_the_configs_degrees():
             check_values({"connection": {"alpha_max_deg": math.degrees(radians)}})
 
 
-def test_connect_letters_takes_more_than_the_settings():
-    # no homing and no steered steps: the algorithm's own values, not the config's
+def test_connect_letters_and_the_config_accept_the_same_values():
+    # no homing and no steered steps: accepted by the function, the settings and the config
     prev, nxt = PAIRS[1]
     assert connect_letters(prev, nxt, home_radius=0.0, max_steps=0).fallback
+    assert ConnectionSettings(home_radius=0.0, max_steps=0).max_steps == 0
+    check_values({"connection": {"home_radius": 0.0, "max_steps": 0}})
+    # ... and refuse the same: the function checks its arguments with ConnectionSettings
+    for field, value in [("home_radius", -0.5), ("max_steps", 100_001), ("delta", 11.0)]:
+        with pytest.raises(SettingsError) as in_function:
+            connect_letters(prev, nxt, **{field: value})
+        with pytest.raises(UsageError) as in_config:
+            check_values({"connection": {field: value}})
+        assert str(in_function.value.under("connection")) == str(in_config.value)
 
 
 def test_straight_joiner_spaces_points_evenly_at_most_delta_apart():
@@ -430,7 +440,7 @@ def test_straight_joiner_result_fields_and_bad_arguments():
     for kwargs, match in [
         ({"prev": np.zeros((2, 3))}, "prev must have shape"),
         ({"nxt": [[np.inf, 0.0]]}, "nxt contains NaN"),
-        ({"delta": -1.0}, "delta must be a positive"),
+        ({"delta": -1.0}, r"delta must be a finite number in \(0, 10\]"),
     ]:
         args = {"prev": [[0.0, 0.0]], "nxt": [[1.0, 0.0]], "delta": 0.3, **kwargs}
         with pytest.raises(UsageError, match=match):

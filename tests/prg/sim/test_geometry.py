@@ -84,12 +84,14 @@ def test_paper_frame_puts_the_writing_line_along_world_minus_y_and_round_trips()
 
 
 def test_paper_rejects_a_bad_size_naming_it():
-    with pytest.raises(SettingsError, match=r"^size_cm must be two positive numbers") as err:
+    with pytest.raises(
+        SettingsError, match=r"^size_cm\[0\] must be a finite number in \(0, 1000\]"
+    ) as err:
         Paper(size_cm=(0.0, 10.0))
-    assert err.value.field == "size_cm"
+    assert err.value.field == "size_cm[0]"
     from prg.sim import SimSettings
 
-    with pytest.raises(UsageError, match=r"^paper\.size_cm must be two positive numbers"):
+    with pytest.raises(UsageError, match=r"^paper\.size_cm\[0\] must be a finite number in \(0, "):
         SimSettings.from_mapping({"paper": {"size_cm": [0.0, 10.0]}})
 
 

@@ -101,7 +101,7 @@ def test_a_named_robot_reads_prg_conf_dir(tmp_path, monkeypatch):
     monkeypatch.setenv("PRG_CONF_DIR", str(tmp_path))
     assert RobotSettings.named("mine").pen_length == 0.2
     (tmp_path / "robot" / "bad.yaml").write_text(yaml.safe_dump(node | {"pen_offset": [0, 0]}))
-    with pytest.raises(UsageError, match=r"bad\.yaml: pen_offset must be 3 finite numbers"):
+    with pytest.raises(UsageError, match=r"bad\.yaml: pen_offset must be a list of 3 numbers"):
         RobotSettings.named("bad")
 
 
