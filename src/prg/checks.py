@@ -272,6 +272,7 @@ FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse")  # the model families: conf/mo
 CHOICES: dict[str, tuple[str, tuple[str, ...]]] = {  # key -> (what a value is, accepted values)
     "family": ("family", FAMILIES),  # prg-write, prg-dictaphone, prg-simulate
     "families": ("family", FAMILIES),  # prg-evaluate (a list)
+    "resume": ("resume mode", ("sweep", "auto", "never")),  # prg-train (prg.commands.train)
 }
 
 

@@ -78,7 +78,8 @@ def test_killed_mid_epoch_run_resumes_into_one_finished_run(tmp_path, small_data
     assert [r.info.run_id for r in runs] == [run_id]
     assert runs[0].info.status == "FINISHED"
     assert torch.load(last, weights_only=False)["global_step"] == EPOCHS * BATCHES
-    assert {p.name for p in ckpt_dir.iterdir()} == {"best.ckpt", "last.ckpt"}
+    outputs = {p.name for p in ckpt_dir.iterdir() if not p.name.startswith(".")}
+    assert outputs == {"best.ckpt", "last.ckpt", "finished.json"}  # finished.json: resume=auto
     epoch_ends = [(e + 1) * BATCHES - 1 for e in range(EPOCHS)]  # each epoch once, at its end
     for name in ("train/loss", "val/loss"):
         assert [m.step for m in client.get_metric_history(run_id, name)] == epoch_ends, name

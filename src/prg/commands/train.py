@@ -18,6 +18,18 @@ history has each epoch once (see ``LastCheckpoint`` for the one sub-second windo
 leaves an epoch's ``val/*`` twice); ``train_steps/*`` are the means over each
 ``trainer.log_every_n_steps`` steps (:class:`prg.training.callbacks.StepMeans`).
 
+Sweeps that survive being stopped (``resume``, :func:`plan_job`): in a multirun (``-m``, any
+launcher) each job first looks at its ``checkpoint_dir``. A job that finished before with the same
+identity (family, seed, profile, data manifest hash and the hash of its resolved config, the
+``resume`` and ``ckpt_path`` options left out: :func:`job_identity`), as recorded in
+``finished.json`` (written after a successful fit and its export), is skipped with one log line;
+a job whose ``last.ckpt`` carries that identity resumes from it into the same MLflow run; any
+other job trains from scratch (a ``finished.json`` or ``last.ckpt`` of another config is
+logged and replaced, never resumed). So running a stopped sweep's command again trains only what
+is left, and a SLURM job requeued by submitit (pre-emption, ``max_num_timeout``) resumes itself.
+``resume=sweep`` (default) does this in multiruns only; ``resume=auto`` in single runs too;
+``resume=never`` always trains from scratch. An explicit ``ckpt_path`` wins over all of them.
+
 The run goes to the experiment ``logger.experiment_name`` with a description (the family,
 profile, data and command line, :func:`run_description`); its page in the MLflow UI is logged
 at the end.
@@ -25,6 +37,8 @@ at the end.
 
 from __future__ import annotations
 
+import hashlib
+import json
 import logging
 import os
 import shutil
@@ -64,14 +78,16 @@ log = logging.getLogger(__name__)
 
 @dataclass
 class TrainResult:
-    """What a training run produced."""
+    """What a training run produced (``skipped``: it had finished before, ``resume``; no module
+    or trainer then, the metrics are those it finished with)."""
 
-    module: PRGModule
-    trainer: L.Trainer
+    module: PRGModule | None
+    trainer: L.Trainer | None
     metrics: dict[str, float]
     run_id: str | None
     best_checkpoint: str
     last_checkpoint: str
+    skipped: bool = False
 
 
 def train_settings(cfg: DictConfig) -> TrainSettings:
@@ -150,6 +166,108 @@ def _resolve_ckpt_path(cfg: DictConfig) -> str | None:
     return str(last)
 
 
+RESUME_MODES = ("sweep", "auto", "never")
+"""``resume``: ``auto`` skips a finished job and resumes an interrupted one, ``never`` always
+trains from scratch, ``sweep`` is ``auto`` in a multirun and ``never`` in a single run."""
+FINISHED = "finished.json"
+"""The completion marker in ``checkpoint_dir``, written after a successful fit and its export."""
+IDENTITY_KEY = "prg_job"
+"""Where a checkpoint carries the :func:`job_identity` of the run that wrote it."""
+
+
+def job_identity(cfg: DictConfig, manifest_hash: str) -> dict[str, Any]:
+    """What makes two runs the same job: family, seed, profile, the data manifest's hash and the
+    SHA-256 of the resolved config (JSON, sorted keys) without ``resume`` and ``ckpt_path``,
+    which say how to run a job, not which."""
+    resolved = OmegaConf.to_container(cfg, resolve=True)
+    for key in ("resume", "ckpt_path"):
+        resolved.pop(key, None)
+    text = json.dumps(resolved, sort_keys=True, default=str)
+    return {
+        "family": str(cfg.model.name),
+        "seed": int(cfg.seed),
+        "profile": str(cfg.get("profile") or "default"),
+        "data_manifest_sha256": manifest_hash,
+        "config_sha256": hashlib.sha256(text.encode()).hexdigest(),
+    }
+
+
+def resume_mode(cfg: DictConfig) -> str:
+    """``auto`` or ``never``: the ``resume`` option, ``sweep`` read as ``auto`` in a Hydra
+    multirun job (any launcher, a requeued SLURM job included) and ``never`` elsewhere."""
+    mode = cfg.get("resume") or "sweep"
+    if mode not in RESUME_MODES:
+        raise UsageError(f"unknown resume mode {mode}; accepted: {', '.join(RESUME_MODES)}")
+    if mode != "sweep":
+        return mode
+    from hydra.core.hydra_config import HydraConfig
+    from hydra.types import RunMode
+
+    multirun = HydraConfig.initialized() and HydraConfig.get().mode == RunMode.MULTIRUN
+    return "auto" if multirun else "never"
+
+
+@dataclass
+class JobPlan:
+    """What :func:`plan_job` decided: ``skip``, ``resume`` (from ``checkpoint``) or ``fresh``."""
+
+    action: str
+    reason: str
+    finished: dict[str, Any] | None = None  # skip: the marker
+    checkpoint: dict[str, Any] | None = None  # resume: the loaded last.ckpt
+    ckpt_path: str | None = None
+
+
+def read_finished(checkpoint_dir: str | os.PathLike) -> dict[str, Any] | None:
+    """The completion marker of ``checkpoint_dir`` (None: none, or not a readable one)."""
+    try:
+        marker = json.loads((Path(checkpoint_dir) / FINISHED).read_text())
+    except (OSError, ValueError):
+        return None
+    return marker if isinstance(marker, dict) else None
+
+
+def plan_job(cfg: DictConfig, identity: dict[str, Any]) -> JobPlan:
+    """``resume=auto``: skip the job if ``finished.json`` matches ``identity`` (and the export,
+    when ``export_dir`` is set, is there), else resume from ``last.ckpt`` if it carries
+    ``identity``, else train from scratch. A marker or checkpoint of another identity (another
+    config, data or profile in the same ``checkpoint_dir``) is never used: the job trains again."""
+    folder = Path(cfg.checkpoint_dir)
+    marker = read_finished(folder)
+    if marker is not None and marker.get("identity") == identity:
+        export = cfg.get("export_dir")
+        if not export or (Path(export) / "metrics.json").is_file():
+            return JobPlan("skip", f"finished before ({folder / FINISHED})", finished=marker)
+        return JobPlan("fresh", f"finished before, but its export {export} is gone: training again")
+    why = f"{folder / FINISHED} is of another config" if marker is not None else ""
+    last = folder / "last.ckpt"
+    if not last.is_file():
+        return JobPlan("fresh", why or "nothing to resume")
+    try:
+        checkpoint = read_checkpoint(last)
+    except UsageError as err:
+        return JobPlan("fresh", f"{err}: training from scratch")
+    if checkpoint.get(IDENTITY_KEY) != identity:
+        return JobPlan("fresh", f"{last} is of another config: training from scratch")
+    step = checkpoint.get("global_step", 0)
+    return JobPlan("resume", f"resuming {last} at step {step}", None, checkpoint, str(last))
+
+
+def _skipped(cfg: DictConfig, marker: dict[str, Any]) -> TrainResult:
+    folder = Path(cfg.checkpoint_dir)
+    metrics = {k: float(v) for k, v in (marker.get("metrics") or {}).items()}
+    best, last = folder / "best.ckpt", folder / "last.ckpt"
+    return TrainResult(
+        None,
+        None,
+        metrics,
+        marker.get("mlflow_run_id"),
+        str(best) if best.is_file() else "",
+        str(last) if last.is_file() else "",
+        skipped=True,
+    )
+
+
 def run_description(cfg: DictConfig, manifest: dict[str, Any], manifest_hash: str) -> str:
     """The MLflow description of a training run (Markdown): what, on which data, how to rerun."""
     from prg.evaluation.reports import title
@@ -189,6 +307,7 @@ def _train(cfg: DictConfig, held: ExitStack) -> TrainResult:
     check_output(cfg.checkpoint_dir, "checkpoint_dir")
     if cfg.get("export_dir"):
         check_output(cfg.export_dir, "export_dir")
+    identity = job_identity(cfg, manifest_hash)
     resume, ckpt_path = None, _resolve_ckpt_path(cfg)
     if ckpt_path:
         resume = read_checkpoint(ckpt_path)
@@ -199,6 +318,18 @@ def _train(cfg: DictConfig, held: ExitStack) -> TrainResult:
                 f"({cfg.model.module.model._target_}): pass the matching model=..."
             )
     held.enter_context(_lock_outputs(cfg))
+    if not ckpt_path and resume_mode(cfg) == "auto":  # a sweep's job: done, to resume or new
+        plan = plan_job(cfg, identity)
+        job = f"{cfg.model.name} seed {cfg.seed}"
+        if plan.action == "skip":
+            run = (plan.finished or {}).get("mlflow_run_id")
+            log.info(
+                "%s: %s, MLflow run %s: skipped (resume=never retrains)", job, plan.reason, run
+            )
+            return _skipped(cfg, plan.finished or {})
+        log.info("%s: %s", job, plan.reason)
+        resume, ckpt_path = plan.checkpoint, plan.ckpt_path
+    (Path(cfg.checkpoint_dir) / FINISHED).unlink(missing_ok=True)  # done again only at the end
     L.seed_everything(cfg.seed, workers=True)
 
     datamodule = build_datamodule(cfg)
@@ -228,8 +359,9 @@ def _train(cfg: DictConfig, held: ExitStack) -> TrainResult:
         tags=tags,
     )
     callbacks = [_build(c, f"callbacks.{name}") for name, c in cfg.callbacks.items() if c]
-    from prg.training.callbacks import LastCheckpoint, MLflowRun, best_checkpoint
+    from prg.training.callbacks import JobIdentity, LastCheckpoint, MLflowRun, best_checkpoint
 
+    callbacks.append(JobIdentity(identity, IDENTITY_KEY))  # what resume=auto matches
     callbacks.append(
         MLflowRun(
             config_yaml=OmegaConf.to_yaml(cfg, resolve=True),
@@ -262,8 +394,24 @@ def _train(cfg: DictConfig, held: ExitStack) -> TrainResult:
         history = history_rows(logger.experiment, logger.run_id)
         _export(Path(cfg.export_dir), best, metrics, logger.run_id, cfg, history)
     if trainer.is_global_zero:
+        if trainer.state.finished:
+            _write_finished(cfg, identity, logger.run_id, metrics)
         log.info("MLflow run %s: %s", logger.run_id, runs_page(logger.experiment_id))
     return TrainResult(module, trainer, metrics, logger.run_id, best, last)
+
+
+def _write_finished(cfg: DictConfig, identity: dict[str, Any], run_id: str, metrics) -> None:
+    """``finished.json``: this job's identity, run and metrics, after its fit and export, so that
+    ``resume=auto`` skips it (a kill before this line leaves a job that resumes instead)."""
+    write_json(
+        Path(cfg.checkpoint_dir) / FINISHED,
+        {
+            "identity": identity,
+            "mlflow_run_id": run_id,
+            "finished_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+            "metrics": {k: v for k, v in sorted(metrics.items()) if v == v},  # no NaN in JSON
+        },
+    )
 
 
 HISTORY_METRICS = ("train/loss", "val/loss", "val/nll_per_dim_T")

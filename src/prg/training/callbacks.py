@@ -110,6 +110,19 @@ class LastCheckpoint(Checkpoint):
             pl_module._counts = dict(state["counts"])
 
 
+class JobIdentity(L.Callback):
+    """Writes the identity of the job (``prg.commands.train.job_identity``: family, seed, profile,
+    data and config hashes) into every checkpoint under ``key``, so that ``prg-train resume=auto``
+    resumes a ``last.ckpt`` only into the job that wrote it."""
+
+    def __init__(self, identity: dict[str, Any], key: str = "prg_job"):
+        self.identity = dict(identity)
+        self.key = key
+
+    def on_save_checkpoint(self, trainer, pl_module, checkpoint: dict[str, Any]) -> None:
+        checkpoint[self.key] = dict(self.identity)
+
+
 class SystemMetrics(L.Callback):
     """CPU, memory, disk and network use (and GPU, where one is monitored) of the training run,
     logged by MLflow's own system-metrics monitor as ``system/*`` metrics of the run, every

@@ -32,7 +32,8 @@ def test_run_records_params_metrics_config_figures_and_checkpoint(tmp_path, smal
         "checkpoints/best.ckpt"
     ]
     ckpt_dir = tmp_path / "checkpoints/prg/avae_ts-seed0"
-    assert {p.name for p in ckpt_dir.iterdir()} == {"best.ckpt", "last.ckpt"}
+    outputs = {p.name for p in ckpt_dir.iterdir() if not p.name.startswith(".")}
+    assert outputs == {"best.ckpt", "last.ckpt", "finished.json"}  # finished.json: resume=auto
 
 
 def test_resume_from_last_checkpoint_continues_the_same_run(tmp_path, small_dataset):
@@ -176,3 +177,71 @@ def test_the_run_logs_its_dataset_with_the_manifests_digest(tmp_path, small_data
     assert run.data.tags["prg.data.manifest_sha256"] == sha
     assert str(manifest.parent.resolve()) in used.dataset.source
     assert [(t.key, t.value) for t in used.tags] == [("mlflow.data.context", "training")]
+
+
+def _plan_cfg(tmp_path, *overrides: str):
+    return compose_config(
+        "train", [f"paths.root_dir={tmp_path}", "model=muse", "resume=auto", *overrides]
+    )
+
+
+def test_resume_auto_skips_only_a_job_finished_with_the_same_identity(tmp_path):
+    import json
+
+    from prg.commands.train import FINISHED, job_identity, plan_job
+
+    cfg = _plan_cfg(tmp_path)
+    identity = job_identity(cfg, "a" * 64)
+    assert plan_job(cfg, identity).action == "fresh"  # nothing there
+    folder = tmp_path / "checkpoints/prg/muse-seed0"
+    folder.mkdir(parents=True)
+    (folder / FINISHED).write_text(json.dumps({"identity": identity, "mlflow_run_id": "r1"}))
+    plan = plan_job(cfg, identity)
+    assert (plan.action, plan.finished["mlflow_run_id"]) == ("skip", "r1")
+    # how to run a job is not which job: resume and ckpt_path leave the identity as it is
+    assert job_identity(_plan_cfg(tmp_path, "resume=never"), "a" * 64) == identity
+    # another config, data or seed: never skipped
+    for other in (
+        job_identity(_plan_cfg(tmp_path, "trainer.max_epochs=3"), "a" * 64),
+        job_identity(cfg, "b" * 64),
+    ):
+        plan = plan_job(cfg, other)
+        assert plan.action == "fresh" and "another config" in plan.reason
+    # finished, but its export is gone (DVC removes a stage's outputs): trained again
+    exported = _plan_cfg(tmp_path, f"export_dir={tmp_path / 'models/muse'}")
+    identity = job_identity(exported, "a" * 64)
+    (folder / FINISHED).write_text(json.dumps({"identity": identity}))
+    plan = plan_job(exported, identity)
+    assert plan.action == "fresh" and "export" in plan.reason
+
+
+def test_resume_auto_resumes_only_a_last_checkpoint_of_the_same_identity(
+    tmp_path, untrained_muse_checkpoint
+):
+    from prg.commands.train import IDENTITY_KEY, job_identity, plan_job
+
+    cfg = _plan_cfg(tmp_path)
+    identity = job_identity(cfg, "a" * 64)
+    last = tmp_path / "checkpoints/prg/muse-seed0/last.ckpt"
+    last.parent.mkdir(parents=True)
+    ckpt = torch.load(untrained_muse_checkpoint, weights_only=False)
+    torch.save({**ckpt, "global_step": 7, IDENTITY_KEY: identity}, last)
+    plan = plan_job(cfg, identity)
+    assert (plan.action, plan.ckpt_path, plan.checkpoint["global_step"]) == ("resume", str(last), 7)
+    other = job_identity(_plan_cfg(tmp_path, "seed=0", "model.batch_size=8"), "a" * 64)
+    assert plan_job(cfg, other).action == "fresh"  # a checkpoint of another config
+    torch.save(ckpt, last)  # one written before checkpoints carried their identity
+    assert plan_job(cfg, identity).action == "fresh"
+    last.write_text("not a checkpoint")
+    assert plan_job(cfg, identity).action == "fresh"
+
+
+def test_resume_mode_sweep_is_auto_in_multiruns_only_and_bad_values_are_refused():
+    from prg.checks import check_values
+    from prg.commands.train import resume_mode
+    from prg.errors import UsageError
+
+    assert resume_mode(compose_config("train", [])) == "never"  # a single run, no HydraConfig
+    assert resume_mode(compose_config("train", ["resume=auto"])) == "auto"
+    with pytest.raises(UsageError, match="unknown resume mode always; accepted: sweep, auto"):
+        check_values(compose_config("train", ["resume=always"]))
