@@ -12,7 +12,7 @@ STAMP := $(VENV)/.setup-$(shell cat pyproject.toml | sha1sum | cut -c1-12)
 export PATH := $(CURDIR)/$(BIN):$(PATH)
 
 .DEFAULT_GOAL := help
-.PHONY: help system setup demo paper converged test test-all lint format bench results clean mutate docs
+.PHONY: help system setup demo baselines paper converged test test-all lint format bench results clean mutate docs
 
 help: ## Show this help
 	@awk 'BEGIN {FS = ":.*## "} /^[a-zA-Z_-]+:.*## / {printf "  \033[36m%-10s\033[0m %s\n", $$1, $$2}' $(MAKEFILE_LIST)
@@ -64,6 +64,36 @@ demo: setup ## Run the whole pipeline (dvc repro): data, models, evaluation, Tab
 	@echo "          prg-tasks holds evaluate/write/simulate/dictaphone; UI: switch GenAI -> Model training)"
 	@echo "Rerun:    rerun --web-viewer reports/simulate/sim.rrd   (or plain \`rerun FILE\` with a display)"
 	@echo "Results:  make results SNAPSHOT=1   (the README's tables from these reports)"
+
+# Families x seeds of the quick profile, evaluated per (seed, family) with the demo's budget
+# (params.yaml evaluate:), then every table as mean and 95 % CI over seeds with paired,
+# Holm-corrected comparisons (docs/results.md "Seeds and error bars"). Outputs under
+# $(BASELINES)/ (ignored by git); one MLflow parent run holds the aggregate, each training run is
+# its child. BASELINE_ARGS: Hydra overrides for training and evaluation (e.g. paths.data_dir=...),
+# BASELINE_TRAIN_ARGS for training alone (e.g. trainer.max_epochs=1), BASELINE_EVAL_ARGS for
+# evaluation alone (e.g. likelihood.n_test=50).
+BASELINES ?= baselines
+BASELINE_SEEDS ?= 0,1,2,3,4
+BASELINE_FAMILIES ?= $(foreach f,cvae avae_ts avae_ti muse mvae mmvae mopoe,$(if $(wildcard conf/model/$(f).yaml),$(f)))
+BASELINE_ARGS ?=
+BASELINE_TRAIN_ARGS ?=
+BASELINE_EVAL_ARGS ?=
+_comma := ,
+_empty :=
+_space := $(_empty) $(_empty)
+baselines: setup ## Families x 5 seeds (quick), evaluated; mean, 95 % CI, paired tests -> baselines/report/
+	@set -e; started=$$(date +%s); out=$(abspath $(BASELINES)); \
+	parent=$$($(BIN)/python -m prg.commands.baselines parent $$out $(BASELINE_ARGS)); \
+	PRG_PARENT_RUN_ID=$$parent $(BIN)/prg-train -m \
+		model=$(subst $(_space),$(_comma),$(strip $(BASELINE_FAMILIES))) seed=$(BASELINE_SEEDS) \
+		experiment=quick 'export_dir='$$out'/seed$${seed}/$${model.name}' \
+		'checkpoint_dir='$$out'/checkpoints/$${model.name}-seed$${seed}' \
+		trainer.enable_progress_bar=false $(BASELINE_ARGS) $(BASELINE_TRAIN_ARGS); \
+	$(BIN)/python -m prg.commands.baselines evaluate $$out --families "$(BASELINE_FAMILIES)" \
+		--seeds $(BASELINE_SEEDS) $(BASELINE_ARGS) $(BASELINE_EVAL_ARGS); \
+	$(BIN)/python -m prg.commands.baselines aggregate $$out --families "$(BASELINE_FAMILIES)" \
+		--seeds $(BASELINE_SEEDS) --started $$started $(BASELINE_ARGS); \
+	echo "Reports: $(BASELINES)/report/index.md (tables, comparisons.csv, comparison.png)"
 
 # Options after PAPER_ARGS=, e.g. PAPER_ARGS="--families muse --device auto" (python -m prg.commands.paper_scale -h)
 paper: setup ## Paper scale on one GPU: the 4 families (experiment=paper) at once, then K=1000/5000 -> paper/

@@ -6,6 +6,7 @@ generated blocks of ``docs/results.md`` (demo, converged) and ``docs/benchmarks.
     python benchmarks/summarize.py --snapshot   # first copy the demo's report JSON (after `make demo`)
                                                 # into benchmarks/results/demo/
     python benchmarks/summarize.py --snapshot-converged converged   # after `make converged`
+    python benchmarks/summarize.py --snapshot-baselines baselines   # after `make baselines`
     python benchmarks/summarize.py --check      # exit 1 if results.md or a docs page is stale
 
 Inputs: ``benchmarks/results/bench_*.json`` (written by each benchmark) and
@@ -26,6 +27,7 @@ _HERE = str(Path(__file__).resolve().parent)
 if _HERE not in sys.path:  # loaded by path (the tests) rather than run as a script
     sys.path.insert(0, _HERE)
 
+from summary.baselines import baselines_markdown, snapshot_baselines  # noqa: E402
 from summary.bench_table import BENCHMARKS, benchmark_rows, benchmarks_markdown  # noqa: E402
 from summary.common import (  # noqa: E402
     CONVERGED,
@@ -64,6 +66,7 @@ __all__ = [
     "SUMMARY",
     "Row",
     "SummaryError",
+    "baselines_markdown",
     "benchmark_rows",
     "benchmarks_markdown",
     "converged_markdown",
@@ -74,6 +77,7 @@ __all__ = [
     "ratio_text",
     "results_markdown",
     "snapshot",
+    "snapshot_baselines",
     "snapshot_converged",
 ]
 

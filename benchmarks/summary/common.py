@@ -14,6 +14,7 @@ ROOT = Path(__file__).resolve().parents[2]
 RESULTS = ROOT / "benchmarks" / "results"
 DEMO = RESULTS / "demo"
 CONVERGED = RESULTS / "converged"
+BASELINES = RESULTS / "baselines"
 
 table = _md_table  # header and rows -> a Markdown table, as prg.evaluation.reports writes them
 

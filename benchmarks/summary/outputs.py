@@ -11,8 +11,9 @@ from pathlib import Path
 
 from prg.files import write_text
 
+from .baselines import baselines_markdown, snapshot_baselines
 from .bench_table import benchmarks_markdown
-from .common import CONVERGED, DEMO, RESULTS, ROOT, SummaryError
+from .common import BASELINES, CONVERGED, DEMO, RESULTS, ROOT, SummaryError
 from .reports import converged_markdown, demo_markdown
 from .snapshot import snapshot, snapshot_converged
 
@@ -20,7 +21,7 @@ SUMMARY = ROOT / "benchmarks" / "results.md"
 DOCS = ROOT / "docs"
 # docs page -> the generated blocks it holds, in their order on the page
 BLOCKS: dict[Path, tuple[str, ...]] = {
-    DOCS / "results.md": ("demo", "converged"),
+    DOCS / "results.md": ("demo", "converged", "baselines"),
     DOCS / "benchmarks.md": ("benchmarks",),
 }
 DESCRIPTION = (
@@ -66,13 +67,17 @@ def fill_block(text: str, name: str, content: str, where: str) -> str:
 
 
 def block_contents(
-    results: Path = RESULTS, demo: Path = DEMO, converged: Path = CONVERGED
+    results: Path = RESULTS,
+    demo: Path = DEMO,
+    converged: Path = CONVERGED,
+    baselines: Path = BASELINES,
 ) -> dict[str, Callable[[], str]]:
     """Block name -> its content (made when asked)."""
     return {
         "benchmarks": lambda: benchmarks_markdown(results),
         "demo": lambda: demo_markdown(demo),
         "converged": lambda: converged_markdown(converged),
+        "baselines": lambda: baselines_markdown(baselines),
     }
 
 
@@ -106,6 +111,12 @@ def main(argv: list[str] | None = None) -> int:
         metavar="ROOT",
         help="copy the metrics of a finished `make converged` under ROOT first",
     )
+    parser.add_argument(
+        "--snapshot-baselines",
+        type=Path,
+        metavar="DIR",
+        help="copy DIR/report/aggregate.json of a finished `make baselines` first",
+    )
     parser.add_argument("--check", action="store_true", help="exit 1 if any output is stale")
     args = parser.parse_args(argv)
     try:
@@ -113,6 +124,8 @@ def main(argv: list[str] | None = None) -> int:
             snapshot()
         if args.snapshot_converged:
             snapshot_converged(args.snapshot_converged)
+        if args.snapshot_baselines:
+            snapshot_baselines(args.snapshot_baselines)
         outputs = {SUMMARY: results_markdown(), **docs_texts()}
     except SummaryError as err:
         print(f"summarize: error: {err}", file=sys.stderr)

@@ -25,7 +25,7 @@ def test_the_docs_pages_hold_the_generated_blocks():
     assert {
         p.relative_to(summarize.ROOT).as_posix(): names for p, names in summarize.BLOCKS.items()
     } == {
-        "docs/results.md": ("demo", "converged"),
+        "docs/results.md": ("demo", "converged", "baselines"),
         "docs/benchmarks.md": ("benchmarks",),
     }
 
@@ -325,3 +325,28 @@ def test_images_moved_off_centre_show_each_shift_for_the_models_that_read_images
     assert _row(text, title, "PRG_AVAE(T,I)") == ["70%", "60%", "50%", "-", "-", "-"]
     assert "PRG_CVAE(T,S)" not in text.split(title)[1].split("**Smoothness**")[0]
     assert title not in _demo_with(tmp_path / "old", {})  # a snapshot made before it: no table
+
+
+def test_the_baselines_snapshot_shows_its_tables_over_seeds_and_its_wall_time(tmp_path):
+    from prg.evaluation import seeds
+
+    out = tmp_path / "snapshot"
+    assert "No baselines snapshot yet" in summarize.baselines_markdown(out)
+    values = {
+        "cvae": {"coherence_T_given_S": {0: 0.80, 1: 0.82, 2: 0.79}},
+        "avae_ti": {"coherence_T_given_I": {0: 0.90, 1: 0.91, 2: 0.93}},
+    }
+    agg = {**seeds.aggregate(values), "wall_min": 12.5, "machine": "a CPU (2 cores)"}
+    sweep = tmp_path / "baselines"
+    (sweep / "report").mkdir(parents=True)
+    (sweep / "report" / "aggregate.json").write_text(json.dumps(seeds.json_ready(agg)))
+    summarize.snapshot_baselines(sweep, out)
+    text = summarize.baselines_markdown(out)
+    assert "`cvae`, `avae_ti` x seeds 0-2 (quick profile), 12.5 min wall on a CPU (2 cores)" in text
+    assert (
+        "| `coherence_T_given_S` | 0.803 [" in text
+        and "| `coherence_T_given_I` |  | 0.913 [" in text
+    )
+    (sweep / "report" / "aggregate.json").write_text("{}")
+    with pytest.raises(summarize.SummaryError, match="not an aggregate"):
+        summarize.snapshot_baselines(sweep, out)

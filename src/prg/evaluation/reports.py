@@ -98,6 +98,12 @@ COHERENCE_COLUMNS = (
 )
 
 
+ONE_SEED = (
+    "One seed: each model trained once, so no spread over training seeds is shown "
+    "(`make baselines`: mean and 95 % CI over seeds)."
+)
+
+
 def title(family: str) -> str:
     return FAMILY_TITLES.get(family, family)
 
@@ -371,7 +377,10 @@ def setup_line(
         )
     else:
         what = f"test samples: {settings.n_test if settings.n_test is not None else 'all'}"
-    return f"Data: {data_name} test split; {what}; seed {settings.seed}. Checkpoints: {ckpts}."
+    return (
+        f"Data: {data_name} test split; {what}; seed {settings.seed}. {ONE_SEED} "
+        f"Checkpoints: {ckpts}."
+    )
 
 
 def report_texts(
@@ -452,7 +461,7 @@ def likeness_markdown(rows: list[dict], settings: EvaluationSettings) -> str:
             "generated over real (1: as varied as writers). **mean (paper)** is the paper's "
             "decoding; **hand (default)** writes each letter from a real writer's letter "
             "posterior (prg.pipeline.hands). Seed "
-            f"{settings.seed}.",
+            f"{settings.seed}. {ONE_SEED}",
             "",
             _md_table(["family", "mode", *LIKENESS_MEASURES], body),
             "",
@@ -524,7 +533,7 @@ def styles_markdown(rows: list[dict], settings: EvaluationSettings) -> str:
             f"{s.temperature}). generated: share of those letters the classifier attributes to "
             "the right writer (mean ± sd over seeds); real: its share on the writers' own "
             "letters of the same classes; ratio: generated over real; chance: one over the "
-            "writers.",
+            f"writers. {ONE_SEED}",
             "",
             _md_table(["family", "k", "generated", "real", "ratio", "chance"], body),
             "",

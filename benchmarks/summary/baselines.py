@@ -1,0 +1,47 @@
+"""The baselines' section (``make baselines``: families x seeds of the quick profile, every table
+as mean and 95 % CI over seeds with paired, Holm-corrected comparisons), from the snapshot of its
+``aggregate.json`` in ``benchmarks/results/baselines/`` (``--snapshot-baselines baselines``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from prg.evaluation.seeds import seeds_text, summary_markdown
+from prg.files import write_bytes
+
+from .common import BASELINES, SummaryError, read_json
+
+AGGREGATE = "aggregate.json"
+
+
+def baselines_markdown(baselines: Path = BASELINES) -> str:
+    """The short tables over seeds (cross-modal coherence, roughness, Table I conditionals,
+    times) and the sweep's wall time, or a line saying how to get them."""
+    if not (baselines / AGGREGATE).is_file():
+        return (
+            "No baselines snapshot yet: `make baselines`, then "
+            "`python benchmarks/summarize.py --snapshot-baselines baselines`."
+        )
+    agg = read_json(baselines / AGGREGATE)
+    wall = (
+        f"{agg['wall_min']:.1f} min wall on {agg.get('machine', 'this machine')}"
+        if agg.get("wall_min") is not None
+        else "wall time not recorded"
+    )
+    head = (
+        f"`make baselines`: {', '.join(f'`{f}`' for f in agg['families'] if f != 'real')} x "
+        f"seeds {seeds_text(agg['seeds'])} (quick profile), {wall}. Every table of the run, "
+        "each pairwise comparison and the figure are in `baselines/report/`."
+    )
+    return head + "\n\n" + summary_markdown(agg, heading="####").rstrip("\n")
+
+
+def snapshot_baselines(source: Path, baselines: Path = BASELINES) -> None:
+    """Copy ``<source>/report/aggregate.json`` of a finished ``make baselines`` into
+    ``baselines``."""
+    path = source / "report" / AGGREGATE
+    agg = read_json(path)
+    if not agg.get("summaries") or not agg.get("seeds"):
+        raise SummaryError(f"{path}: not an aggregate of a baselines sweep")
+    baselines.mkdir(parents=True, exist_ok=True)
+    write_bytes(baselines / AGGREGATE, path.read_bytes())
