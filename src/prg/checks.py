@@ -339,16 +339,50 @@ def _plain(cfg: Any) -> Any:
         raise UsageError(f"the config cannot be resolved: {' '.join(str(err).split())}") from None
 
 
+# ---- options that name a folder (the prepared dataset's, under <data_dir>/prepared/) ----
+FOLDER_NAMES = ("data.name", "data_name", "datamodule.name")
+
+
+def folder_name_problem(value: Any) -> str | None:
+    """Why ``value`` cannot be a plain folder name (None when it can): empty, not text, a
+    ``/``, a leading ``.``, a control character (a newline, a tab) or over 255 bytes."""
+    if not isinstance(value, str) or not value:
+        return "is not a folder name"
+    if "/" in value or value.startswith("."):
+        return "is a path, not a plain folder name"
+    if not value.isprintable():
+        return "holds a control character (a newline, a tab ...)"
+    if len(value.encode("utf-8", "surrogateescape")) > 255:
+        return "is longer than 255 bytes"
+    return None
+
+
+def check_folder_name(value: Any, key: str) -> str:
+    """``value`` if it is a plain folder name (:func:`folder_name_problem`), else one line
+    naming ``key`` and what is accepted."""
+    problem = folder_name_problem(value)
+    if problem:
+        raise UsageError(
+            f"{key}={value!r} {problem}: accepted are printable characters without '/', not "
+            "starting with '.', at most 255 bytes"
+        )
+    return value
+
+
 def check_values(cfg: Any) -> None:
     """Refuse the first numeric option of ``cfg`` (DictConfig or mapping) outside its range.
 
     Keys without an entry in :data:`RANGES` are not checked here (their own code checks them);
     list values are checked element by element (``paper.size_cm=[0,29.7]``). The options of
-    :data:`CHOICES` must name one of their accepted values.
+    :data:`CHOICES` must name one of their accepted values, those of :data:`FOLDER_NAMES` a
+    plain folder name.
     """
     for key, value in leaves(_plain(cfg)):
         if key in CHOICES:
             check_choice(value, key)
+            continue
+        if key in FOLDER_NAMES:
+            check_folder_name(value, key)
             continue
         spec = range_of(key)
         if spec is None:

@@ -906,6 +906,8 @@ def test_a_full_disk_is_one_line_exit_1_but_a_bug_keeps_its_traceback(
     err = capfd.readouterr().err
     assert exit.value.code == 1
     if one_line:
-        assert err.strip().splitlines() == ["prg-x: error: No space left on device"]
+        assert err.strip().splitlines() == [
+            "prg-x: error: No space left on device (free space on that disk, or write elsewhere)"
+        ]
     else:
         assert "Traceback" in err and "KeyError: 'missing'" in err

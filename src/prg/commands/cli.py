@@ -126,6 +126,7 @@ def check_output(path: str | os.PathLike, key: str, *, folder: bool = True) -> P
     """
     path = Path(path)
     kind = "a folder" if folder else "a regular file"
+    _check_links(path, key, kind)
     if path.exists() and (path.is_dir() != folder or not (folder or path.is_file())):
         raise UsageError(f"{key} {path}: exists and is not {kind}")
     existing = path if folder else path.parent
@@ -140,6 +141,24 @@ def check_output(path: str | os.PathLike, key: str, *, folder: bool = True) -> P
     return path
 
 
+def _check_links(path: Path, key: str, kind: str) -> None:
+    """Refuse ``path`` when it or a folder above it is a symbolic link that loops or points to
+    nothing: the output could never be written there (``mkdir`` would say "File exists")."""
+    for part in (path, *path.parents):
+        if not part.is_symlink():
+            continue
+        try:
+            os.stat(part)
+        except OSError as err:
+            problem = "loops" if err.errno == errno.ELOOP else "points to nothing"
+            if err.errno not in (errno.ELOOP, errno.ENOENT):
+                problem = f"cannot be followed ({err.strerror})"
+            raise UsageError(
+                f"{key} {path}: {part} is a symbolic link that {problem}; accepted: {kind} or "
+                "a link to one"
+            ) from None
+
+
 # OSErrors that are about the machine, not the code, even without a file name.
 _ENVIRONMENT_ERRNOS = {
     errno.ENOSPC,
@@ -151,15 +170,67 @@ _ENVIRONMENT_ERRNOS = {
 }
 
 
+# What to do about an OSError of the machine, by errno
+_ADVICE = {
+    errno.ENOSPC: "free space on that disk, or write elsewhere",
+    errno.EDQUOT: "free space within your disk quota, or write elsewhere",
+    errno.EFBIG: "over this process's file size limit: raise it (ulimit -f)",
+    errno.EROFS: "the file system is read-only: write elsewhere",
+    errno.EACCES: "make it writable for this user, or write elsewhere",
+    errno.EPERM: "make it writable for this user, or write elsewhere",
+}
+
+
 def os_error_message(err: OSError) -> str | None:
-    """One line for an OSError about a named file or the disk; None for any other OSError."""
+    """One line for an OSError about a named file or the disk (with what to do about the disk,
+    :data:`_ADVICE`); None for any other OSError."""
     if err.filename is None and err.errno not in _ENVIRONMENT_ERRNOS:
         return None
     reason = err.strerror or str(err)
+    advice = f" ({_ADVICE[err.errno]})" if err.errno in _ADVICE else ""
     if err.filename is None:
-        return reason
+        return f"{reason}{advice}"
     names = f"{err.filename} -> {err.filename2}" if err.filename2 else str(err.filename)
-    return f"{names}: {reason}"
+    return f"{names}: {reason}{advice}"
+
+
+# An MLflow store's database refusing a write: (words of the database's error, the problem)
+_STORE_PROBLEMS = (
+    ("readonly database", "is read-only"),
+    ("read-only", "is read-only"),
+    ("database or disk is full", "cannot grow: its disk is full"),
+    ("disk i/o error", "cannot be written (disk I/O error)"),
+    ("unable to open database file", "cannot be opened"),
+)
+
+
+def store_error_message(err: BaseException, cfg: Any) -> str | None:
+    """One line for an MLflow store (``logger.tracking_uri``, ``MLFLOW_TRACKING_URI``) that
+    refuses to be written, naming the store and what to do; None for any other error."""
+    chain: list[BaseException] = []
+    seen: BaseException | None = err
+    while seen is not None and len(chain) < 10:
+        chain.append(seen)
+        seen = seen.__cause__ or seen.__context__
+    ours = [
+        e for e in chain if type(e).__module__.split(".")[0] in ("mlflow", "sqlalchemy", "sqlite3")
+    ]
+    if not ours:
+        return None
+    text = " ".join(str(e) for e in ours).lower()
+    problem = next((p for words, p in _STORE_PROBLEMS if words in text), None)
+    if problem is None:
+        return None
+    try:
+        from prg.tracking import tracking_uri
+
+        store = tracking_uri(cfg.logger.get("tracking_uri"), cfg.paths.root_dir)
+    except Exception:  # a config without a logger: the environment's store
+        store = os.environ.get("MLFLOW_TRACKING_URI", "the MLflow store")
+    return (
+        f"MLflow store {store} {problem}: make it writable, or log elsewhere with "
+        "logger.tracking_uri=URI or MLFLOW_TRACKING_URI (mlflow=false: no run)"
+    )
 
 
 def compose_config(config_name: str, overrides: list[str], hydra_config: bool = False) -> Any:
@@ -185,10 +256,17 @@ def _hydra_flags_error(argv: list[str]) -> str | None:
 
     parser.error = refuse  # argparse's default prints the usage and exits
     try:
-        _, unknown = parser.parse_known_args(argv)
+        args, unknown = parser.parse_known_args(argv)
     except UsageError as err:
         return str(err)
-    return f"unknown option {unknown[0]}" if unknown else None
+    if unknown:
+        return f"unknown option {unknown[0]}"
+    modes = {"--run": args.run, "--multirun": args.multirun, "--cfg": args.cfg is not None}
+    modes |= {"--info": args.info is not None, "--shell-completion": args.shell_completion}
+    given = [flag for flag, on in modes.items() if on]
+    if len(given) > 1:  # Hydra raises a ValueError with its traceback
+        return f"{' and '.join(given)} cannot be combined: give one of {', '.join(modes)}"
+    return None
 
 
 def route_library_logs() -> None:
@@ -243,16 +321,27 @@ def _preflight(command: str, config_name: str, argv: list[str]) -> None:
     number out of its range or an unknown choice (:func:`prg.checks.check_values`).
 
     Also refuses a Hydra log folder (``hydra.run.dir``, under ``paths.log_dir``) that cannot be
-    created, which Hydra itself would report with a traceback. Skipped when Hydra's own flags
-    are used (``-m`` sweeps are expanded by Hydra, ``--cfg``, ``--help``, ``--config-name`` ...
-    change what is composed); an unknown flag or a bad flag value is refused in one line
-    instead of Hydra's usage text.
+    created, which Hydra itself would report with a traceback. With Hydra's own flags, an
+    unknown flag or a bad flag value is refused in one line instead of Hydra's usage text, and
+    the overrides of ``--cfg`` and ``-m`` are checked as above (a sweep's every value, each
+    with the other overrides, :func:`_sweep_variants`); flags that change what is composed
+    (``--config-name``, ``--config-dir`` ...) or print help leave the overrides to Hydra.
     """
     if any(arg.startswith("-") for arg in argv):
         message = _hydra_flags_error(argv)
         if message:
             fail(command, f"{message} (the options are Hydra's: {command} --help)", 2)
+        overrides = _flagged_overrides(argv)
+        if overrides is not None:
+            for variant in _sweep_variants(command, overrides):
+                _check_composition(command, config_name, variant, log_dir=False)
         return
+    _check_composition(command, config_name, argv, log_dir=True)
+
+
+def _check_composition(command: str, config_name: str, argv: list[str], *, log_dir: bool) -> None:
+    """The checks of :func:`_preflight` on one list of plain overrides (``log_dir``: also the
+    Hydra log folder of a single run)."""
     overrides = [
         a
         for a in argv
@@ -267,9 +356,69 @@ def _preflight(command: str, config_name: str, argv: list[str]) -> None:
         fail(command, unresolved, 2)
     try:
         check_values(OmegaConf.masked_copy(cfg, [key for key in cfg if key != "hydra"]))
-        check_output(cfg.hydra.run.dir, "Hydra's log folder (paths.log_dir)")
+        if log_dir:
+            check_output(cfg.hydra.run.dir, "Hydra's log folder (paths.log_dir)")
     except UsageError as err:
         fail(command, str(err), 2)
+
+
+# Hydra flags after which the overrides are not composed against conf/<command>.yaml as given
+_OTHER_COMPOSITION = (
+    "help",
+    "hydra_help",
+    "info",
+    "shell_completion",
+    "config_path",
+    "config_name",
+    "config_dir",
+    "experimental_rerun",
+)
+_MAX_VARIANTS = 64  # compositions checked for one sweep (each ~0.1 s)
+
+
+def _flagged_overrides(argv: list[str]) -> list[str] | None:
+    """The overrides of a command line with Hydra flags, None when the flags leave them to Hydra
+    (help, another config, shell completion ...)."""
+    from hydra._internal.utils import get_args_parser
+
+    args, _ = get_args_parser().parse_known_args(argv)
+    if any(getattr(args, flag, None) for flag in _OTHER_COMPOSITION):
+        return None
+    return list(args.overrides)
+
+
+def _sweep_variants(command: str, overrides: list[str]) -> list[list[str]]:
+    """Plain override lists that together use every value of every sweep (``seed=0,1``,
+    ``choice(...)``, ``range(...)``): each sweep's value with the first value of the others. A
+    malformed override is refused in one line here; sweeps that cannot be listed
+    (``interval(...)``, ``glob(...)``) are left to the sweeper."""
+    from hydra.core.override_parser.overrides_parser import OverridesParser
+    from hydra.errors import HydraException
+
+    try:
+        parsed = OverridesParser.create().parse_overrides(overrides)
+    except HydraException as err:
+        fail(command, _composition_error(err, "", overrides), 2)
+    plain: list[str] = []
+    sweeps: list[tuple[str, list[str]]] = []
+    for override in parsed:
+        if not override.is_sweep_override():
+            plain.append(override.input_line or "")
+            continue
+        try:
+            values = list(override.sweep_string_iterator())
+        except HydraException:
+            continue
+        if values:
+            sweeps.append((override.get_key_element(), values))
+    first = [f"{key}={values[0]}" for key, values in sweeps]
+    variants = [plain + first]
+    for i, (key, values) in enumerate(sweeps):
+        for value in values[1:]:
+            if len(variants) >= _MAX_VARIANTS:
+                return variants
+            variants.append(plain + first[:i] + [f"{key}={value}"] + first[i + 1 :])
+    return variants
 
 
 # Hydra's message for an unknown option of a config group (``model=musee``), whitespace joined
@@ -300,6 +449,8 @@ def _composition_error(err: Exception, config_name: str, overrides: list[str]) -
         return f"unknown {group.group(1)} {group.group(2)}; accepted: {', '.join(options)}"
     cut = message.find("Set the environment variable HYDRA_FULL_ERROR")
     message = (message[:cut] if cut > 0 else message).strip()
+    cut = message.find(" See https://hydra.cc/docs/")  # the grammar's page, after the reason
+    message = message[:cut] if cut > 0 else message
     if "LexerNoViableAlt" in message or "mismatched input" in message:
         message += " (a value with spaces, commas or symbols needs Hydra quotes: 'key=\"...\"')"
     return message
@@ -385,7 +536,12 @@ def hydra_command(
         except PRGError as err:
             fail(command, str(err), err.exit_code)
         except OSError as err:
-            message = os_error_message(err)
+            message = os_error_message(err) or store_error_message(err, cfg)
+            if message is None:
+                raise
+            fail(command, message, 1)
+        except Exception as err:  # a store that refuses writes is the machine's, not a bug
+            message = store_error_message(err, cfg)
             if message is None:
                 raise
             fail(command, message, 1)

@@ -22,6 +22,7 @@ from tqdm.auto import tqdm
 
 import prg
 from prg.alphabet import ALPHABET, char_to_label
+from prg.checks import folder_name_problem
 from prg.data.augment import AugmentSettings, augment
 from prg.data.download import UJI_SHA256, UJI_URL, UjiSource, resolve_uji_path
 from prg.data.preprocess import (
@@ -90,8 +91,13 @@ class DataSettings:
     uji: UjiSource | None = None
 
     def __post_init__(self) -> None:
-        if not self.name or "/" in self.name or self.name.startswith("."):
-            raise SettingsError("name", f"{self.name!r} must be a plain folder name")
+        problem = folder_name_problem(self.name)
+        if problem:
+            raise SettingsError(
+                "name",
+                f"{self.name!r} {problem}: accepted are printable characters without '/', not "
+                "starting with '.', at most 255 bytes",
+            )
         check_fields(self)
 
 

@@ -46,10 +46,33 @@ def read_checkpoint(path: str | os.PathLike) -> dict[str, Any]:
         raise UsageError(
             f"checkpoint {path} is not a readable checkpoint ({type(err).__name__})"
         ) from None
-    if not isinstance(ckpt, dict) or "state_dict" not in ckpt or "hyper_parameters" not in ckpt:
-        raise UsageError(f"checkpoint {path} is not a prg training checkpoint")
+    problem = _shape_problem(ckpt)
+    if problem:
+        raise UsageError(
+            f"checkpoint {path} is not a prg training checkpoint ({problem}); accepted: a "
+            "model.ckpt, best.ckpt or last.ckpt written by prg-train"
+        )
     check_targets(ckpt["hyper_parameters"], path)
     return ckpt
+
+
+def _shape_problem(ckpt: Any) -> str | None:
+    """What a loaded checkpoint lacks of the entries every reader uses: a ``state_dict`` of
+    tensors and ``hyper_parameters`` whose ``model`` names its class (``_target_``); None when
+    it has them."""
+    if not isinstance(ckpt, dict):
+        return f"it holds a {type(ckpt).__name__}, not a dict"
+    weights, hparams = ckpt.get("state_dict"), ckpt.get("hyper_parameters")
+    if not isinstance(weights, dict) or not all(
+        isinstance(k, str) and isinstance(v, torch.Tensor) for k, v in weights.items()
+    ):
+        return "no state_dict of named tensors"
+    if not isinstance(hparams, dict):
+        return "no hyper_parameters"
+    model = hparams.get("model")
+    if not isinstance(model, dict) or not isinstance(model.get("_target_"), str):
+        return "its hyper_parameters have no model._target_"
+    return None
 
 
 # What a checkpoint's hyper-parameters may instantiate: (module prefix, required base class).

@@ -320,3 +320,13 @@ class GenerateSettings:
             raise SettingsError(
                 "delayed_strokes", f"{self.delayed_strokes!r}: choose true or false"
             )
+        for name, kind in (
+            ("marks", MarkSettings),
+            ("layout", LayoutSettings),
+            ("connection", ConnectionSettings),
+        ):
+            value = getattr(self, name)
+            if not isinstance(value, kind):
+                raise SettingsError(
+                    name, f"must be a {kind.__name__}, got {type(value).__name__} {value!r}"
+                )

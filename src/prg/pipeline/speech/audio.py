@@ -8,9 +8,13 @@ not silent (RMS below ``min_rms_dbfs``), not longer than ``max_seconds``.
 from __future__ import annotations
 
 import functools
+import logging
 import math
 import os
-from collections.abc import Sequence
+import sys
+import tempfile
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager, suppress
 from math import gcd
 from pathlib import Path
 
@@ -19,6 +23,8 @@ import numpy as np
 from prg.errors import UsageError
 from prg.pipeline.speech.dependencies import INSTALL, first_line
 from prg.pipeline.speech.settings import SpeechSettings
+
+log = logging.getLogger(__name__)
 
 SAMPLE_RATE = 16_000  # every backend receives 16 kHz mono float32
 SNDFILE_SUFFIXES = (".wav", ".flac", ".ogg", ".oga", ".aiff", ".aif", ".au", ".caf")
@@ -120,12 +126,39 @@ def _too_long(name: str, seconds: float | None, max_seconds: float) -> UsageErro
     )
 
 
+@contextmanager
+def _decoder_output_to_log() -> Iterator[None]:
+    """While a native decoder runs, the process's stderr (file descriptor 2) goes to a temporary
+    file whose text is then logged (debug): libsndfile's MP3 decoder (mpg123) writes lines such
+    as ``Note: Illegal Audio-MPEG-Header ...`` to it directly when a file named ``.mp3`` is not
+    one, beside the command's own one-line error."""
+    with suppress(Exception):
+        sys.stderr.flush()
+    try:
+        saved = os.dup(2)
+    except OSError:  # no stderr to protect
+        yield
+        return
+    with tempfile.TemporaryFile() as sink:
+        os.dup2(sink.fileno(), 2)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            sink.seek(0)
+            said = sink.read(4096).decode("utf-8", "replace").strip()
+            if said:
+                log.debug("audio decoder: %s", " | ".join(said.splitlines()))
+
+
 def _header_seconds(path: Path) -> float | None:
     """The duration a file's header states (soundfile, else PyAV), None if none can be read."""
     try:
         import soundfile
 
-        info = soundfile.info(str(path))
+        with _decoder_output_to_log():
+            info = soundfile.info(str(path))
         return info.frames / info.samplerate if info.samplerate > 0 else None
     except Exception:  # not a libsndfile format (or no soundfile): ask FFmpeg
         pass
@@ -154,7 +187,7 @@ def _read_file(path: Path, max_seconds: float | None = None) -> tuple[np.ndarray
     except ImportError:
         raise UsageError(f"reading audio files needs soundfile: {INSTALL}") from None
     try:
-        with soundfile.SoundFile(str(path)) as sound:
+        with _decoder_output_to_log(), soundfile.SoundFile(str(path)) as sound:
             rate = int(sound.samplerate)
             cap = sound.frames if max_seconds is None else math.floor(max_seconds * rate) + 1
             data = sound.read(frames=min(sound.frames, cap), dtype="float32", always_2d=True)

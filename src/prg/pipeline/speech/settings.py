@@ -3,12 +3,31 @@
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
-from prg.errors import UsageError
+from prg.errors import SettingsError, UsageError
 
 BACKENDS = ("whisper", "wav2vec2", "pocketsphinx")
 CASES = ("lower", "upper", "title")
+# The language codes whisper decodes (``speech.language``); English-only models read English.
+_LANGUAGE_CODES = (
+    "af am ar as az ba be bg bn bo br bs ca cs cy da de el en es et eu fa fi fo fr gl gu ha haw "
+    "he hi hr ht hu hy id is it ja jw ka kk km kn ko la lb ln lo lt lv mg mi mk ml mn mr ms mt "
+    "my ne nl nn no oc pa pl ps pt ro ru sa sd si sk sl sn so sq sr su sv sw ta te tg th tk tl "
+    "tr tt uk ur uz vi yi yo zh yue"
+)
+LANGUAGES = tuple(_LANGUAGE_CODES.split())
+_NUMBERS = (
+    "prior_weight",
+    "slowdown",
+    "view_margin",
+    "min_lead",
+    "noise_subtraction",
+    "max_seconds",
+    "min_rms_dbfs",
+    "beam_size",
+)
 
 
 def unknown_backend(backend: str) -> UsageError:
@@ -62,7 +81,12 @@ class SpeechSettings:
     beam_size : int
         Beam width of the whisper decoder.
     language : str
-        Spoken language (whisper; English-only models ignore it).
+        Spoken language, one of whisper's codes (:data:`LANGUAGES`; English-only models and the
+        other back-ends read English whatever it says).
+
+    Every number must also lie in the range its ``prg-write`` option ``speech.<field>``
+    accepts (:data:`prg.checks.TABLE`), so settings built in Python refuse what the commands
+    refuse; ``view_margin`` may also be infinite (always score both views).
     """
 
     backend: str = "whisper"
@@ -81,28 +105,42 @@ class SpeechSettings:
     language: str = "en"
 
     def __post_init__(self) -> None:
+        for name in _NUMBERS:
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, numbers.Real):
+                raise SettingsError(name, f"must be a number, got {value!r}")
+        if not isinstance(self.rescore, bool):
+            raise SettingsError("rescore", f"must be true or false, got {self.rescore!r}")
+        if not isinstance(self.language, str) or self.language not in LANGUAGES:
+            raise SettingsError(
+                "language",
+                f"{self.language!r} is unknown: accepted are whisper's language codes "
+                f"({', '.join(LANGUAGES)})",
+            )
         if self.backend not in BACKENDS:
             raise unknown_backend(self.backend)
         if self.case not in CASES:
-            raise UsageError(f"case {self.case!r} is unknown: accepted are {', '.join(CASES)}")
+            raise SettingsError(
+                "case", f"{self.case!r} is unknown: accepted are {', '.join(CASES)}"
+            )
         if self.model is not None:
             object.__setattr__(self, "model", str(self.model))
         if not 0 < self.max_seconds < math.inf:
-            raise UsageError(f"max_seconds must be > 0 and finite, got {self.max_seconds}")
+            raise SettingsError("max_seconds", f"must be > 0 and finite, got {self.max_seconds}")
         if not 0 <= self.prior_weight <= 1:
-            raise UsageError(f"prior_weight must be between 0 and 1, got {self.prior_weight}")
+            raise SettingsError("prior_weight", f"must be between 0 and 1, got {self.prior_weight}")
         if not 1 <= self.slowdown <= 2:
-            raise UsageError(f"slowdown must be between 1 and 2, got {self.slowdown}")
+            raise SettingsError("slowdown", f"must be between 1 and 2, got {self.slowdown}")
         if not 0 <= self.noise_subtraction <= 10:
-            raise UsageError(
-                f"noise_subtraction must be between 0 and 10, got {self.noise_subtraction}"
+            raise SettingsError(
+                "noise_subtraction", f"must be between 0 and 10, got {self.noise_subtraction}"
             )
         if not self.view_margin >= 0:
-            raise UsageError(f"view_margin must be >= 0, got {self.view_margin}")
+            raise SettingsError("view_margin", f"must be >= 0, got {self.view_margin}")
         if not 0 <= self.min_lead < math.inf:
-            raise UsageError(f"min_lead must be >= 0 and finite, got {self.min_lead}")
+            raise SettingsError("min_lead", f"must be >= 0 and finite, got {self.min_lead}")
         if not (isinstance(self.beam_size, int) and self.beam_size >= 1):
-            raise UsageError(f"beam_size must be an integer >= 1, got {self.beam_size!r}")
+            raise SettingsError("beam_size", f"must be an integer >= 1, got {self.beam_size!r}")
         if self.lexicon is not None:
             if isinstance(self.lexicon, str):
                 raise UsageError(
@@ -115,6 +153,7 @@ class SpeechSettings:
                     f"lexicon entries must contain letters or digits, got {list(self.lexicon)!r}"
                 )
             object.__setattr__(self, "lexicon", tuple(dict.fromkeys(words)))
+        self._check_ranges()
         if self.rescore and self.lexicon is None:
             raise UsageError("rescore=True needs a lexicon: the words to choose from")
         if self.rescore and self.backend == "pocketsphinx":
@@ -122,3 +161,15 @@ class SpeechSettings:
                 "rescore is for whisper and wav2vec2; pocketsphinx with a lexicon already "
                 "decodes a closed vocabulary (its grammar)"
             )
+
+    def _check_ranges(self) -> None:
+        """Each number in the range of its config option ``speech.<field>``."""
+        from prg.checks import TABLE, require_number
+
+        for name in _NUMBERS:
+            value = getattr(self, name)
+            if name == "view_margin" and value == math.inf:
+                continue
+            spec = TABLE.get(f"speech.{name}")
+            if spec is not None:
+                require_number(value, name, spec)
