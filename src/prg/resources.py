@@ -31,3 +31,19 @@ def git_commit() -> str:
         return head.stdout.strip() + ("+dirty" if dirty else "")
     except (OSError, subprocess.SubprocessError):
         return "unknown"
+
+
+def project_path(path: str | os.PathLike, root: str | os.PathLike) -> str:
+    """``path`` as the reports name a project file: relative to the project root ``root`` when
+    it lies inside it (``models/muse/model.ckpt``, the same on every machine and checkout),
+    absolute otherwise. ``..`` is folded first; a root or path reached through a symbolic link
+    is also compared with the links resolved."""
+    absolute = Path(os.path.abspath(path))
+    for inside, top in ((absolute, Path(os.path.abspath(root))), (None, None)):
+        if inside is None:  # the same with links resolved
+            inside, top = absolute.resolve(), Path(root).resolve()
+        try:
+            return inside.relative_to(top).as_posix() or "."
+        except ValueError:
+            continue
+    return str(absolute)

@@ -19,6 +19,11 @@ spectrogram or letter images — and the written words below, as the paper's tab
 ``table2.md`` and ``metrics.json`` (what was heard and read, latency, DMP error); with
 ``mlflow=true`` one MLflow run holding them. The table is :mod:`prg.evaluation.dictaphone`'s;
 this module reads the config and saves the outputs.
+
+``words`` is a list (a bare ``words=bell`` is refused). A word given twice is written once, and
+no two words share a folder: a word named like the table's own folder (``inputs``) or like an
+earlier word up to case is written into ``<word>-2`` (each row of ``metrics.json`` names its
+``folder``; :func:`prg.evaluation.dictaphone.word_folders`).
 """
 
 from __future__ import annotations
@@ -29,7 +34,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from omegaconf import DictConfig
+from omegaconf import DictConfig, OmegaConf
 
 from prg.checks import check_values, literal_words
 from prg.commands.cli import check_output
@@ -46,6 +51,7 @@ from prg.evaluation.dictaphone import (
 )
 from prg.files import staged_outputs, write_json, write_text
 from prg.pipeline.compose import clean_text
+from prg.resources import project_path
 from prg.tracking import task_run
 from prg.writer import Writer
 
@@ -55,9 +61,16 @@ log = logging.getLogger(__name__)
 def dictaphone(cfg: DictConfig) -> dict[str, Any]:
     """Task: write every word from speech and from letter images; table, figure, metrics."""
     check_values(cfg)
+    if isinstance(cfg.words, str) or not (
+        OmegaConf.is_list(cfg.words) or isinstance(cfg.words, list | tuple)
+    ):
+        raise UsageError(
+            f"words must be a list of single words, e.g. words=[bell,cat], got {cfg.words!r}"
+        )
     words = [clean_text(w, key="words") for w in literal_words(cfg.words, "words")]
     if not words or any(" " in w for w in words):
         raise UsageError(f"words must be a list of single words, got {list(cfg.words)!r}")
+    words = list(dict.fromkeys(words))  # a word given twice is one row (dictaphone_table)
     channels = list(cfg.channels)
     unknown = [c for c in channels if c not in CHANNELS]
     if unknown or not channels:
@@ -86,7 +99,7 @@ def dictaphone(cfg: DictConfig) -> dict[str, Any]:
             write_text(staging / "table2.md", markdown)
             metrics = {
                 "family": writer.family,
-                "ckpt": str(ckpt),
+                "ckpt": project_path(ckpt, cfg.paths.root_dir),
                 "speech": node(cfg, "speech"),
                 "voice": cfg.voice,
                 "speed_wpm": speed,

@@ -48,7 +48,7 @@ from prg.evaluation.settings import (
     StyleSettings,
 )
 from prg.files import staged_outputs, write_json, write_text
-from prg.resources import git_commit
+from prg.resources import git_commit, project_path
 from prg.tracking import TaskRun, experiment_of, metric_name, task_run
 
 log = logging.getLogger(__name__)
@@ -132,7 +132,8 @@ def evaluate(cfg: DictConfig) -> Evaluation:
 
 def _write_reports(result, models, test, settings, report_dir: Path, cfg: DictConfig) -> Path:
     """Every report, through a staging folder, into ``report_dir``."""
-    checkpoints = {name: loaded.path for name, loaded in models.items()}
+    root = cfg.paths.root_dir  # the reports name project files from its root (project_path)
+    checkpoints = {name: project_path(loaded.path, root) for name, loaded in models.items()}
     with staged_outputs(report_dir) as staging:
         for name, text in report_texts(result, settings, checkpoints, cfg.data.name).items():
             (staging / name).parent.mkdir(exist_ok=True)  # plots/

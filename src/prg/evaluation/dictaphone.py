@@ -70,6 +70,30 @@ def dmp_rmse_mm(result: WriteResult) -> float:
     return float(np.sqrt(np.mean(np.sum((result.rollout - samples) ** 2, axis=1))) * 10)
 
 
+RESERVED_FOLDERS = ("inputs",)
+"""Folder names of :func:`dictaphone_table`'s own outputs, which no word's folder may take."""
+
+
+def word_folders(words: list[str]) -> dict[str, str]:
+    """The folder of each distinct word of ``words``: the word itself, unless that name is
+    taken, by one of :data:`RESERVED_FOLDERS` or by an earlier word up to case (``Cat`` after
+    ``cat``: one folder on a file system that ignores case), then the word with ``-2``, ``-3``
+    ... appended (a word holds only letters and digits, so such a name is never another word's).
+    No two words ever share a folder, whatever the list."""
+    taken = {name.casefold() for name in RESERVED_FOLDERS}
+    folders: dict[str, str] = {}
+    for word in words:
+        if word in folders:
+            continue
+        name, n = word, 1
+        while name.casefold() in taken:
+            n += 1
+            name = f"{word}-{n}"
+        taken.add(name.casefold())
+        folders[word] = name
+    return folders
+
+
 def dictaphone_table(
     writer: Writer,
     words: list[str],
@@ -83,33 +107,42 @@ def dictaphone_table(
     """Write every word from each channel into ``folder``: ``inputs/<word>.wav``,
     ``inputs/<word>/<i>_<c>.png`` and ``<word>/<channel>/`` (as :meth:`WriteResult.save`).
 
+    A word given twice is written once (the first time). ``<word>`` is the word's folder name,
+    :func:`word_folders`: the word itself unless it names one of the table's own folders
+    (``inputs``) or an earlier word up to case, then ``<word>-2`` ...; each row names it
+    (``folder``).
+
     Returns the table's rows (what was perceived and written, latency, DMP error, size) and the
     figure's items (inputs and written words, for :func:`table2_figure`).
     """
     rows, items = [], {}
     inputs_dir = folder / "inputs"
     inputs_dir.mkdir(parents=True, exist_ok=True)
-    for word in words:
+    folders = word_folders(words)
+    for word, name in folders.items():
+        if name != word:
+            log.info("%s: written into the folder %s (%s is taken)", word, name, word)
         for channel in channels:
             if channel == "sound":
-                wav = espeak(word, inputs_dir / f"{word}.wav", voice, speed)
+                wav = espeak(word, inputs_dir / f"{name}.wav", voice, speed)
                 result = writer.write(audio=wav)
                 perceived = result.text
                 items[word, channel] = result.perception.audio
             else:
                 pictures = letter_images(test, word)
-                (inputs_dir / word).mkdir()
+                (inputs_dir / name).mkdir()
                 for i, image in enumerate(pictures):
-                    _save_png(image, inputs_dir / word / f"{i}_{word[i]}.png")
-                perception = writer.perceive(images=inputs_dir / word, spelling=word, read=True)
+                    _save_png(image, inputs_dir / name / f"{i}_{word[i]}.png")
+                perception = writer.perceive(images=inputs_dir / name, spelling=word, read=True)
                 result = writer.generate(perception)
                 perceived = perception.read or ""
                 items[word, channel] = pictures
-            result.save(folder / word / channel, record=record)
+            result.save(folder / name / channel, record=record)
             seconds = result.timings["total"]
             rows.append(
                 {
                     "word": word,
+                    "folder": name,
                     "channel": channel,
                     "perceived": perceived,
                     "correct": perceived == word,

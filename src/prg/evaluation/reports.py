@@ -362,10 +362,11 @@ def _exact_folded(row: dict | None) -> str:
 
 
 def setup_line(
-    part: str, settings: EvaluationSettings, checkpoints: Mapping[str, Path], data_name: str
+    part: str, settings: EvaluationSettings, checkpoints: Mapping[str, str | Path], data_name: str
 ) -> str:
     """The line under a report's title: data, settings of ``part`` (``likelihood`` or
-    ``coherence``), seed and checkpoints."""
+    ``coherence``), seed and checkpoints, named as given (``prg-evaluate`` names a checkpoint
+    in the project relative to the project root, :func:`prg.resources.project_path`)."""
     lk = settings.likelihood
     ckpts = ", ".join(f"{n}: {p}" for n, p in checkpoints.items())
     if part == "likelihood":
@@ -386,7 +387,7 @@ def setup_line(
 def report_texts(
     result: Evaluation,
     settings: EvaluationSettings,
-    checkpoints: Mapping[str, Path],
+    checkpoints: Mapping[str, str | Path],
     data_name: str,
 ) -> dict[str, str]:
     """File name -> text of every report of the evaluated parts: ``table1.{csv,md}`` (likelihood),

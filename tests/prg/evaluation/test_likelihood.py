@@ -119,6 +119,11 @@ def test_reports_tables_figures_and_mlflow(trained_root, small_dataset):
     coherence_md = (reports / "coherence.md").read_text()
     assert "test accuracy" in coherence_md and "mean, folded" in coherence_md
     assert "## Smoothness of decoded letters" in coherence_md
+    # the setup lines name the checkpoints from the project root, the same on every machine
+    named = ", ".join(f"{f}: models/{f}/model.ckpt" for f in FAMILIES)
+    for text in (table, robustness, coherence_md):
+        assert f"Checkpoints: {named}." in text
+        assert str(trained_root) not in text
     figures = {p.name for p in (reports / "figures").iterdir()}
     assert {"muse_T_given_S.png", "muse_I_given_T.png", "muse_coherence_per_class.png"} <= figures
 
