@@ -134,7 +134,8 @@ def iw_log_likelihood(
     Parameters
     ----------
     path : ImportancePath
-        Proposal (batch shape (B, d)), decoder and target modality.
+        Proposal (batch shape (B, d); a Gaussian or a mixture of them), decoder and target
+        modality.
     x : Tensor
         Target data, batch size B.
     likelihoods : Likelihoods
@@ -179,17 +180,15 @@ def iw_log_likelihoods(
         raise UsageError(f"chunk must be >= 1, got {chunk}")
     if not likelihoods:
         raise UsageError("no likelihood to estimate under")
-    proposal: Gaussian = path.proposal
-    batch = proposal.mu.shape[0]
+    proposal: Gaussian = path.proposal  # or a Mixture of them (the same sample, log_prob)
+    batch = x.shape[0]
     shape = (len(likelihoods), batch)
-    running_max = torch.full(shape, -math.inf, device=proposal.mu.device)
-    running_sum = torch.zeros(shape, device=proposal.mu.device)
-    std = torch.exp(0.5 * proposal.logvar)
+    running_max = torch.full(shape, -math.inf, device=x.device)
+    running_sum = torch.zeros(shape, device=x.device)
     done = 0
     while done < k:
         n = min(chunk, k - done)
-        eps = torch.randn((n, *proposal.mu.shape), generator=generator, device=proposal.mu.device)
-        z = proposal.mu + std * eps  # (n, B, d)
+        z = proposal.sample(n, generator=generator)  # (n, B, d)
         params = path.decode(z.reshape(n * batch, -1))
         params = params.reshape(n, batch, *params.shape[1:])
         latent = standard_normal_log_prob(z) - proposal.log_prob(z)  # (n, B)

@@ -1,10 +1,11 @@
-"""One interface for every multimodal VAE family (CVAE, AVAE, MUSE).
+"""One interface for every multimodal VAE family (CVAE, AVAE, MUSE; MVAE, MMVAE, MoPoE).
 
 Batches and inputs are dicts keyed by modality (:data:`prg.models.modalities.MODALITIES`: ``traj``
 (B, 200), ``label`` (B,) long, ``image`` (B, 1, 28, 28)); a missing modality is simply absent.
 
 - :meth:`MultimodalVAE.encode` — posterior over the family's generative latent from any input
-  subset the family supports (a clear :class:`~prg.errors.UsageError` otherwise);
+  subset the family supports (a clear :class:`~prg.errors.UsageError` otherwise): a
+  :class:`Gaussian`, or for the mixture families a :class:`~prg.models.mixture.Mixture` of them;
 - :meth:`MultimodalVAE.decode` — likelihood parameters of a modality from a latent;
 - :meth:`MultimodalVAE.generate` — data-space outputs of a target modality from inputs;
 - :meth:`MultimodalVAE.elbo` — the training loss and its named terms, averaged over the batch;
@@ -43,11 +44,25 @@ class Gaussian:
     mu: torch.Tensor
     logvar: torch.Tensor
 
-    def sample(self, n: int | None = None, temperature: float = 1.0) -> torch.Tensor:
-        """Reparameterised samples, shape (n, ..., d) (or (..., d) when ``n`` is None)."""
+    def sample(
+        self,
+        n: int | None = None,
+        temperature: float = 1.0,
+        generator: torch.Generator | None = None,
+    ) -> torch.Tensor:
+        """Reparameterised samples, shape (n, ..., d) (or (..., d) when ``n`` is None), the
+        standard deviation scaled by ``temperature``; 0 gives the mean and draws nothing."""
         shape = self.mu.shape if n is None else (n, *self.mu.shape)
-        eps = torch.randn(shape, device=self.mu.device, dtype=self.mu.dtype) * temperature
-        return reparameterise(self.mu, self.logvar, eps)
+        if temperature == 0:
+            return self.mu.expand(shape)
+        eps = torch.randn(shape, generator=generator, device=self.mu.device, dtype=self.mu.dtype)
+        return reparameterise(self.mu, self.logvar, eps * temperature)
+
+    @property
+    def mean(self) -> torch.Tensor:
+        """E[z], shape (..., d): ``mu`` (the interface a :class:`~prg.models.mixture.Mixture`
+        shares)."""
+        return self.mu
 
     def log_prob(self, z: torch.Tensor) -> torch.Tensor:
         """log N(z; mu, var) summed over the last dimension."""
@@ -59,10 +74,12 @@ class ImportancePath:
     """Everything an importance-weighted estimate of ``log p(x_target | x_given)`` needs.
 
     ``w_k = log p(x_target | decode(z_k)) + prior.log_prob(z_k) - proposal.log_prob(z_k)`` with
-    ``z_k ~ proposal``; the estimate is ``logmeanexp_k w_k``.
+    ``z_k ~ proposal``; the estimate is ``logmeanexp_k w_k``. The proposal is a
+    :class:`Gaussian` or a :class:`~prg.models.mixture.Mixture` of them (the mixture families):
+    anything with ``sample(n, generator=...)`` and ``log_prob``.
     """
 
-    proposal: Gaussian
+    proposal: Gaussian  # or a prg.models.mixture.Mixture
     decode: Callable[[torch.Tensor], torch.Tensor]
     target: str
     latent_dim: int
@@ -154,6 +171,10 @@ class MultimodalVAE(nn.Module, ABC):
                 f"it accepts {accepted}"
             )
 
+    #: Whether :meth:`encode` may return a :class:`~prg.models.mixture.Mixture` (MMVAE,
+    #: MoPoE) rather than one Gaussian when several modalities are given.
+    mixture_posterior: bool = False
+
     #: Whether :meth:`encode_imputed` differs from :meth:`encode` (a joint posterior that
     #: imputed modalities can join).
     imputes_missing: bool = False
@@ -184,8 +205,10 @@ class MultimodalVAE(nn.Module, ABC):
         n : int
             Samples per input.
         temperature : float
-            0 decodes the posterior mean (every sample equal); otherwise latents are drawn with
-            their standard deviation scaled by ``temperature``.
+            0 decodes the posterior mean (every sample equal; for a mixture posterior, the mean
+            of one component drawn per sample, :meth:`prg.models.mixture.Mixture.sample`);
+            otherwise latents are drawn with their standard deviation scaled by
+            ``temperature``.
         impute_steps : int
             0 (the paper): the posterior of ``inputs`` alone; k > 0: the posterior after k
             rounds of imputing the missing modalities (:meth:`encode_imputed`).
@@ -206,11 +229,7 @@ class MultimodalVAE(nn.Module, ABC):
         posterior = (
             self.encode_imputed(inputs, impute_steps) if impute_steps else self.encode(inputs)
         )
-        z = (
-            posterior.mu.expand(n, *posterior.mu.shape)
-            if temperature == 0
-            else posterior.sample(n, temperature)
-        )
+        z = posterior.sample(n, temperature)  # temperature 0: a mean (Mixture: a component's)
         flat = z.reshape(-1, z.shape[-1])
         context = None
         if inputs:
