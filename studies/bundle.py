@@ -43,6 +43,7 @@ from pathlib import Path
 import prg
 from prg.errors import UsageError
 from prg.files import staged_folder
+from prg.resources import project_path
 from studies.design import Row, balance_notes, design_rows
 from studies.design_config import StudySettings
 from studies.stimuli import (
@@ -515,8 +516,9 @@ def _build_into(
             "render": vars(style),
             "robot": {  # how the robot's words were written (prg-study judge writes more)
                 **config.robot,
-                "ckpt": str(Path(ckpt).resolve()) if ckpt is not None else config.robot["ckpt"],
-                "dir": str(robot_dir) if robot_dir is not None else None,
+                # project files named from the project root (the manifest travels)
+                "ckpt": _shown(ckpt) if ckpt is not None else config.robot["ckpt"],
+                "dir": _shown(robot_dir) if robot_dir is not None else None,
             },
             "columns": list(response_columns(config.kind)),
         },
@@ -625,3 +627,11 @@ Open `index.html` (file:// works) or serve this folder from any static host
   `prg-study build --human DIR`.
 - Handwriting: {handwriting}
 """
+
+
+def _shown(path: str | Path) -> str:
+    """``path`` as the manifest names it: from the project root when inside the project
+    (:func:`prg.resources.project_path`), absolute otherwise."""
+    from prg.commands.cli import project_root
+
+    return project_path(path, project_root()[0])

@@ -462,3 +462,16 @@ def test_a_failed_rebuild_leaves_the_previous_build_intact(tmp_path, samples, ca
     assert "x.json: not valid JSON" in capsys.readouterr().err
     assert (out / "trials.json").read_text() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["b", "broken"]  # no temporary folders
+
+
+def test_the_manifest_names_project_files_from_the_project_root(tmp_path, samples, monkeypatch):
+    """The robot's folder inside the project is named from the project root (the bundle is
+    shared; a path of this machine would say nothing there), one outside it absolutely."""
+    import shutil
+
+    shutil.copytree(samples["robot"], tmp_path / "project" / "outputs" / "robot")
+    monkeypatch.setenv("PRG_ROOT", str(tmp_path / "project"))
+    out = build(tmp_path / "b", "turing", robot=tmp_path / "project" / "outputs" / "robot")
+    assert json.loads((out / "manifest.json").read_text())["robot"]["dir"] == "outputs/robot"
+    out = build(tmp_path / "c", "turing", robot=samples["robot"])
+    assert json.loads((out / "manifest.json").read_text())["robot"]["dir"] == str(samples["robot"])
