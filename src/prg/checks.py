@@ -268,7 +268,8 @@ TABLE: dict[str, Range] = {
 
 
 # ---- options that name one of a fixed set ----
-FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse")  # the model families: conf/model/<family>.yaml
+# the model families, conf/model/<family>.yaml: the paper's four, then the baselines
+FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse", "mvae", "mmvae", "mopoe")
 CHOICES: dict[str, tuple[str, tuple[str, ...]]] = {  # key -> (what a value is, accepted values)
     "family": ("family", FAMILIES),  # prg-write, prg-dictaphone, prg-simulate
     "families": ("family", FAMILIES),  # prg-evaluate (a list)

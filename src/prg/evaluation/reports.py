@@ -35,6 +35,9 @@ FAMILY_TITLES = {
     "avae_ts": "PRG_AVAE(T,S)",
     "avae_ti": "PRG_AVAE(T,I)",
     "muse": "PRG_MUSE(T,S,I)",
+    "mvae": "MVAE(T,S,I)",
+    "mmvae": "MMVAE(T,S,I)",
+    "mopoe": "MoPoE(T,S,I)",
 }
 
 

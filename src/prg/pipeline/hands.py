@@ -227,11 +227,13 @@ def components(bank: HandBank, hand: Hand, labels: np.ndarray, seed: int) -> np.
 
 def component_inputs(model: MultimodalVAE, traj: np.ndarray, labels: np.ndarray) -> dict:
     """The model inputs a component letter is encoded from: its trajectory and label where the
-    family takes both (MUSE's joint posterior, the CVAE's encoder), its trajectory alone
-    otherwise (an AVAE's trajectory expert)."""
+    family takes both (MUSE's joint posterior, the CVAE's encoder, the MVAE's product), its
+    trajectory alone otherwise (an AVAE's trajectory expert, the MMVAE's and MoPoE's trajectory
+    component: their posterior from both is a mixture, not one code)."""
     accepted = {frozenset(s) for s in model.accepted_inputs}
     traj_input = torch.from_numpy(np.asarray(traj, dtype=np.float32))
-    if frozenset((TRAJ, LABEL)) in accepted:
+    # a mixture family (MMVAE, MoPoE) mixes T and S into two modes: its trajectory's own posterior
+    if frozenset((TRAJ, LABEL)) in accepted and not model.mixture_posterior:
         return {TRAJ: traj_input, LABEL: torch.as_tensor(np.asarray(labels), dtype=torch.long)}
     if frozenset((TRAJ,)) in accepted:
         return {TRAJ: traj_input}
@@ -466,7 +468,7 @@ def nearest_components(
     -------
     ndarray, shape (N, 200), float32
     """
-    command = model.encode(inputs).mu
+    command = model.encode(inputs).mean  # a mixture posterior's: the mean of its components
     out = np.empty((len(labels), bank.traj.shape[1]), dtype=np.float32)
     for y in np.unique(labels):
         same = np.flatnonzero(bank.label == y)
@@ -474,7 +476,7 @@ def nearest_components(
             raise UsageError(
                 f"letter {label_to_char(int(y))!r}: the model's writers never wrote it"
             )
-        codes = model.encode(component_inputs(model, bank.traj[same], bank.label[same])).mu
+        codes = model.encode(component_inputs(model, bank.traj[same], bank.label[same])).mean
         rows = np.flatnonzero(labels == y)
         nearest = torch.cdist(command[rows], codes).argmin(-1).numpy()
         out[rows] = bank.traj[same[nearest]]
