@@ -235,6 +235,14 @@ def evaluate(
     check_trained(folder, families, seeds)
     env = {**os.environ, **({"PRG_PARENT_RUN_ID": parent} if parent else {})}
     done = []
+    if not all(up_to_date(folder, s, f) for s in seeds for f in families):
+        # the classifiers first (reused while their data and settings hold), so that no
+        # family's evaluation time includes training them
+        args = evaluate_overrides(folder, families[0], seeds[0], root, extra)
+        args = [a for a in args if not a.startswith("parts=")] + ["parts=[classifiers]"]
+        code = subprocess.run([_command("prg-evaluate"), *args], env=env).returncode
+        if code:
+            raise SystemExit(code)
     for seed in seeds:
         for family in families:
             if up_to_date(folder, seed, family):

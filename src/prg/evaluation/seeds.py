@@ -239,7 +239,11 @@ def collect(
         reports = root / f"seed{seed}" / "reports"
         if families is None:
             names = sorted(p.name for p in reports.iterdir()) if reports.is_dir() else []
-            names = [f for f in names if (reports / f / "metrics.json").is_file()]
+            names = [
+                f
+                for f in names
+                if not f.startswith(".") and (reports / f / "metrics.json").is_file()
+            ]  # a hidden name: a staging folder of an evaluation under way
         else:
             names = list(families)
         for family in names:
@@ -553,7 +557,7 @@ def comparison_figure(agg: Mapping[str, Any], path: Path) -> Path:
         ),
         squeeze=False,
     )
-    width = 0.8 / max(1, len(families))
+    width = min(0.25, 0.8 / max(1, len(families)))
     for ax, (label, cells, ylim) in zip(axes[:, 0], panels, strict=True):
         x = np.arange(len(cells))
         for j, metric in enumerate(cells):  # each cell's bars centred on it: only who has it

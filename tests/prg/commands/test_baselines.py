@@ -157,7 +157,7 @@ def test_make_baselines_end_to_end_on_a_tiny_budget(tmp_path, small_dataset):
         "BASELINE_TRAIN_ARGS=trainer.max_epochs=1 trainer.limit_train_batches=3 "
         "trainer.limit_val_batches=2 ~callbacks.figures",
         "BASELINE_EVAL_ARGS=likelihood.k_marginal=5 likelihood.k_conditional=5 "
-        "likelihood.n_test=8 n_test=40 classifier.epochs=1 likeness.n_per_class=2 "
+        "likelihood.n_test=8 n_test=40 classifier.epochs=1 likeness.n_per_class=4 "
         "coherence.impute_steps=0",
     ]
     result = subprocess.run(make, cwd=REPO, env=env, capture_output=True, text=True, timeout=1500)

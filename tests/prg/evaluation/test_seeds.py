@@ -153,6 +153,8 @@ def _sweep(root, families=("cvae", "avae_ts"), seed_ids=(0, 1, 2)):
 
 def test_collect_reads_a_sweep_and_names_what_is_missing(tmp_path):
     root = _sweep(tmp_path / "baselines")
+    # an evaluation under way: its hidden staging folder is not a family
+    write_json(root / "seed0" / "reports" / ".muse.tmp-99" / "metrics.json", {"muse/x": 1.0})
     values = seeds.collect(root)
     assert set(values) == {"cvae", "avae_ts", "real"}
     assert values["cvae"]["train_cpu_min"] == {0: 2.0, 1: 121 / 60, 2: 122 / 60}
