@@ -582,6 +582,7 @@ def comparison_figure(agg: Mapping[str, Any], path: Path) -> Path:
                         capsize=2,
                     )
         ax.set_xticks(x, [_cell_label(m) for m in cells], fontsize=8)
+        ax.set_xlim(-0.6, len(cells) - 0.4)  # a cell's room is the same with one cell or ten
         ax.set_title(label, fontsize=10)
         if ylim:
             ax.set_ylim(*ylim)
