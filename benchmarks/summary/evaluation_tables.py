@@ -20,6 +20,7 @@ from prg.evaluation.reports import FAMILY_TITLES, _cell_title
 from prg.models.modalities import TRAJ
 
 from .common import number, table
+from .snapshot import PIPELINE_FAMILIES
 
 # Table I's cells (logp_T, logp_S ... logp_I_given_T) and those with a trajectory target
 TRAJ_CELLS = [c for c, (target, _) in TABLE1_CELLS.items() if target == TRAJ]
@@ -55,7 +56,7 @@ def table1_markdown(evaluate: dict, models: dict[str, dict]) -> str:
                 *(main_cell(family, c) for c in TABLE1_CELLS),
                 number(models.get(family, {}), "val_loss", ".1f"),
             ]
-            for family in FAMILY_TITLES
+            for family in PIPELINE_FAMILIES
         ],
     )
     own = table(
@@ -65,7 +66,7 @@ def table1_markdown(evaluate: dict, models: dict[str, dict]) -> str:
                 FAMILY_TITLES[family],
                 *(number(evaluate, f"{family}/{c}{MODEL_STD_SUFFIX}", ".1f") for c in TRAJ_CELLS),
             ]
-            for family in FAMILY_TITLES
+            for family in PIPELINE_FAMILIES
         ],
     )
     return "\n".join(
@@ -105,7 +106,7 @@ def coherence_markdown(evaluate: dict) -> str:
         ["model", *(c.replace("_given_", " from ") for c in COHERENCE_CELLS)],
         [
             [title, *(cell(f, kind, c) for c in COHERENCE_CELLS)]
-            for f in FAMILY_TITLES
+            for f in PIPELINE_FAMILIES
             for title, kind in variants(f)
         ],
     )
@@ -119,7 +120,7 @@ def coherence_markdown(evaluate: dict) -> str:
                     for c in ROUGHNESS_CELLS
                 ),
             ]
-            for f in FAMILY_TITLES
+            for f in PIPELINE_FAMILIES
             for title, kind in variants(f)
         ],
     )
@@ -133,7 +134,7 @@ def coherence_markdown(evaluate: dict) -> str:
                     for subset in ROBUSTNESS_SUBSETS
                 ),
             ]
-            for f in FAMILY_TITLES
+            for f in PIPELINE_FAMILIES
             for title, kind in variants(f)
         ],
     )
@@ -190,7 +191,7 @@ def _shifted_images_markdown(evaluate: dict) -> list[str]:
                 FAMILY_TITLES[f],
                 *(number(evaluate, f"{f}/coherence_folded_{c}_shift{s}", ".0%") for c, s in cells),
             ]
-            for f in FAMILY_TITLES
+            for f in PIPELINE_FAMILIES
             if f"{f}/coherence_folded_T_given_I_shift0" in evaluate
         ],
     )
@@ -211,7 +212,7 @@ def likeness_markdown(evaluate: dict) -> str:
     rows = [m.groups() for k in evaluate if (m := pattern.match(k))]
     if not rows:
         return ""
-    families = ["real", *list(FAMILY_TITLES)]
+    families = ["real", *PIPELINE_FAMILIES]
     modes = ["val_writers", "train_originals", "mean", "imputed", "sampled_t0.5", "sampled_t1"]
     modes += ["hand_t0", "hand", "hand_t1"]
     rows.sort(key=lambda r: (families.index(r[0]), modes.index(r[1]) if r[1] in modes else 99))

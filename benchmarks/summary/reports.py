@@ -9,14 +9,14 @@ from prg.evaluation.reports import FAMILY_TITLES
 
 from .common import CONVERGED, DEMO, read_json, table
 from .evaluation_tables import coherence_markdown, likeness_markdown, table1_markdown
-from .snapshot import CONVERGED_SOURCES, DEMO_SOURCES
+from .snapshot import CONVERGED_SOURCES, DEMO_SOURCES, PIPELINE_FAMILIES
 
 
 def demo_markdown(demo: Path = DEMO) -> str:
     """Tables of the demo pipeline's results (quick profile, synthetic data)."""
     d = {name: read_json(demo / name) for name in DEMO_SOURCES}
     evaluate = d["evaluate.json"]
-    models = {family: d[f"models_{family}.json"] for family in FAMILY_TITLES}
+    models = {family: d[f"models_{family}.json"] for family in PIPELINE_FAMILIES}
     dictaphone = d["dictaphone.json"]
     table2 = table(
         ["word", "channel", "perceived", "written", "DMP error", "seconds"],
@@ -91,12 +91,12 @@ def converged_markdown(converged: Path = CONVERGED) -> str:
         )
     d = {name: read_json(converged / name) for name in CONVERGED_SOURCES}
     run, evaluate = d["run.json"], d["evaluate.json"]
-    models = {family: d[f"models_{family}.json"] for family in FAMILY_TITLES}
+    models = {family: d[f"models_{family}.json"] for family in PIPELINE_FAMILIES}
     settings, stages = run["settings"], run["stages"]
     fit = run.get("fit", {})
     costs = ", ".join(
         f"{FAMILY_TITLES[f]} {_minutes(fit[f]['fit_cpu_s'])} CPU ({fit[f]['epochs']:.0f} epochs)"
-        for f in FAMILY_TITLES
+        for f in PIPELINE_FAMILIES
         if f in fit
     )
     n_likelihood = settings.get("n_test_likelihood") or "all"

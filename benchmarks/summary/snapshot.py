@@ -11,11 +11,9 @@ from prg.files import write_bytes, write_json
 from .common import CONVERGED, DEMO, ROOT, SummaryError, read_json
 
 # each model's and the classifiers' metrics, relative to the folder that holds ``models/``
+PIPELINE_FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse")  # the paper's: dvc.yaml's train matrix
 MODEL_SOURCES = {
-    "models_cvae.json": "models/cvae/metrics.json",
-    "models_avae_ts.json": "models/avae_ts/metrics.json",
-    "models_avae_ti.json": "models/avae_ti/metrics.json",
-    "models_muse.json": "models/muse/metrics.json",
+    **{f"models_{f}.json": f"models/{f}/metrics.json" for f in PIPELINE_FAMILIES},
     "classifiers.json": "models/classifiers/metrics.json",
     "evaluate.json": "reports/metrics.json",
 }
