@@ -84,7 +84,7 @@ class MMVAE(MultimodalVAE):
         )
 
     def noise(self, like: torch.Tensor, k: int) -> torch.Tensor:
-        """Standard normal noise of ``k`` reparameterised samples, shape (k, *like.shape) (a
+        """Standard normal noise of ``k`` reparameterised samples, shape ``(k, *like.shape)`` (a
         seam for tests)."""
         return torch.randn((k, *like.shape), device=like.device, dtype=like.dtype)
 

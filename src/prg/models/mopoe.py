@@ -14,7 +14,7 @@ code estimates it)::
 
 with P the 2^M - 1 non-empty subsets of all M modalities and ``z_i ~ q_{S_i}`` drawn from one
 subset posterior per sample: the subsets are dealt to the batch's rows in turn from a random
-offset, so each gets |B| / |P| rows (stratified sampling of the mixture). The KL of the mixture
+offset, so each gets ``|B| / |P|`` rows (stratified sampling of the mixture). The KL of the mixture
 is replaced by the mean of its components' KLs, an upper bound (KL is convex). Written for any
 number of modalities >= 2.
 """
