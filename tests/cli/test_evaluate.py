@@ -17,7 +17,9 @@ def test_classifiers_part_alone(tmp_path, small_dataset):
     )
     assert result.returncode == 0, result.stderr[-2000:]
     folder = tmp_path / "models/classifiers"
-    assert {"traj.pt", "image.pt", "metrics.json"} <= {p.name for p in folder.iterdir()}
+    assert {"traj.pt", "image.pt", "image_knn.npz", "metrics.json"} <= {
+        p.name for p in folder.iterdir()
+    }
     assert not (tmp_path / "reports").exists()
 
 

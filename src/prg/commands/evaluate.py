@@ -38,6 +38,7 @@ from prg.evaluation.run import (
     load_test_data,
     run_evaluation,
 )
+from prg.evaluation.second_readers import ensure_second_readers
 from prg.evaluation.settings import (
     ClassifierSettings,
     CoherenceSettings,
@@ -111,9 +112,10 @@ def evaluate(cfg: DictConfig) -> Evaluation:
     classifier_dir = Path(cfg.classifier.dir)
     if settings.classifiers_only:
         check_output(classifier_dir, "classifier.dir")
-        ensure_classifiers(
+        classifiers = ensure_classifiers(
             data_dir, classifier_dir, settings.classifier, progress=settings.progress
         )
+        ensure_second_readers(data_dir, classifier_dir, classifiers, settings.classifier.seed)
         return Evaluation()
     report_dir = check_output(cfg.report_dir, "report_dir")
     models = load_models(checkpoint_paths(cfg))
@@ -141,7 +143,7 @@ def _write_reports(result, models, test, settings, report_dir: Path, cfg: DictCo
         if "coherence" in settings.parts and settings.figures:
             (staging / "figures").mkdir()
             trained = {name: loaded.model for name, loaded in models.items()}
-            evaluation_figures(trained, result.per_class, test, staging / "figures")
+            evaluation_figures(trained, result.per_class, test, staging / "figures", result.readers)
         write_json(staging / "metrics.json", result.metrics)
     return report_dir
 

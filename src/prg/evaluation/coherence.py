@@ -12,11 +12,15 @@ Coherence is reported exact and *folded*: the folded rate also counts a generate
 class is a shape twin of the true one (o/O/0, x/X, i/I/l ...,
 :data:`~prg.evaluation.classifiers.SHAPE_TWINS`), letters that are the same shape once size and
 position are normalised away, so neither a classifier nor a reader can tell them apart.
+
+Each generated trajectory and image is also read by a second, independently built classifier
+(:mod:`prg.evaluation.second_readers`, :func:`generated_readings`);
+:mod:`prg.evaluation.agreement` compares the two readings.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 
 import torch
 from torch import nn
@@ -46,12 +50,56 @@ def generated_classes(
 ) -> torch.Tensor:
     """Class assigned to each generated ``target`` sample (shape (N,), long): a generated label's
     most probable class, the classifier's (``classifiers[target]``) for anything else."""
-    out = torch.empty(samples(data), dtype=torch.long)
-    is_class = MODALITIES[target].kind == "class"
+    readers = (
+        [] if MODALITIES[target].kind == "class" else [_classifier_reader(classifiers[target])]
+    )
+    return generated_readings(
+        model, target, given, data, readers, temperature, batch_size, seed, impute_steps
+    )[:, 0]
+
+
+def _classifier_reader(classifier: nn.Module) -> Callable[[torch.Tensor], torch.Tensor]:
+    return lambda x: predict(classifier, x)
+
+
+@torch.no_grad()
+def generated_readings(
+    model: MultimodalVAE,
+    target: str,
+    given: tuple[str, ...],
+    data: Inputs,
+    readers: Sequence[Callable[[torch.Tensor], torch.Tensor]],
+    temperature: float = 0.0,
+    batch_size: int = 512,
+    seed: int = 0,
+    impute_steps: int = 0,
+) -> torch.Tensor:
+    """The class each reader assigns to each generated ``target`` sample; every reader reads the
+    same generated samples.
+
+    Parameters
+    ----------
+    model, target, given, data, temperature, batch_size, seed, impute_steps
+        As :func:`generated_classes`.
+    readers : sequence of callables
+        Each maps a batch of generated ``target`` samples to class ids (N,). Ignored for a
+        generated label, whose most probable class is its only reading.
+
+    Returns
+    -------
+    torch.Tensor
+        Class ids, shape (N, R) with R = ``len(readers)`` (1 for a label), long.
+    """
+    if MODALITIES[target].kind == "class":
+        readers = [lambda generated: generated.argmax(-1)]
+    elif not readers:
+        raise ValueError(f"generated {target} needs at least one reader")
+    out = torch.empty(samples(data), len(readers), dtype=torch.long)
     for rows, generated in _generated_batches(
         model, target, given, data, temperature, batch_size, seed, impute_steps
     ):
-        out[rows] = generated.argmax(-1) if is_class else predict(classifiers[target], generated)
+        for column, read in enumerate(readers):
+            out[rows, column] = read(generated)
     return out
 
 

@@ -3,7 +3,7 @@ class, and its coherence per class."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -21,11 +21,16 @@ def evaluation_figures(
     per_class: Mapping[tuple[str, str, str, str], np.ndarray],
     data: dict[str, torch.Tensor],
     folder: Path,
+    readers: Mapping[str, Sequence[Callable[[torch.Tensor], torch.Tensor]]] | None = None,
 ) -> None:
     """Save into ``folder``, for each model: ``<name>_<T>_given_<S>.png``, the posterior mean
     of every cross-modal generation it supports that can be drawn (trajectories, images), from
     the first test sample of each class; ``<name>_coherence_per_class.png``, its coherence per
-    class (``per_class``: (model, target, given subset, kind) -> rates, the ``mean`` kind)."""
+    class (``per_class``: (model, target, given subset, kind) -> rates, the ``mean`` kind).
+
+    With ``readers`` (modality -> the first and second classifier as callables, batch -> class
+    ids) each drawn sample's title also gives every classifier's reading of it, ``A: A/m``: the
+    class it was generated from, then the first and the second classifier's verdicts."""
     from prg.plotting import pyplot
 
     plt = pyplot()
@@ -43,9 +48,16 @@ def evaluation_figures(
                 continue
             out = model.generate({m: data[m][index] for m in given}, target)[0].numpy()
             label = f"{LETTER[target]}_given_{''.join(LETTER[m] for m in given)}"
-            fig = draw(
-                out, names, title=f"{name}: {label} (posterior mean), one test sample per class"
-            )
+            title = f"{name}: {label} (posterior mean), one test sample per class"
+            titles = names
+            if readers and target in readers:
+                read = [r(torch.as_tensor(out)) for r in readers[target]]
+                titles = [
+                    f"{n}: {'/'.join(ALPHABET[int(v[i])] for v in read)}"
+                    for i, n in enumerate(names)
+                ]
+                title += "; titles: class: first/second classifier's reading"
+            fig = draw(out, titles, title=title)
             fig.savefig(folder / f"{name}_{label}.png", dpi=110)
             plt.close(fig)
         keys = [k for k in per_class if k[0] == name and k[3] == "mean"]

@@ -14,6 +14,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from prg.evaluation.agreement import agreement_markdown, mark, mark_note
 from prg.evaluation.classifiers import SHAPE_TWINS
 from prg.evaluation.likelihood import (
     MODEL_STD_SUFFIX,
@@ -97,6 +98,13 @@ COHERENCE_COLUMNS = (
     "temperature",
     "coherence",
     "coherence_folded",
+    "coherence_second",
+    "coherence_folded_second",
+    "agreement",
+    "agreement_folded",
+    "difference",
+    "difference_folded",
+    "coherence_folded_both",
     "n",
 )
 
@@ -218,14 +226,16 @@ def coherence_markdown(
     rows: list[dict], classifier_info: dict, setup: str, smoothness: list[dict] | None = None
 ) -> str:
     """Per model: a row per (target, input subset), exact and folded columns per generation
-    kind; then the roughness of decoded letters (``smoothness`` rows), when given."""
+    kind (the first classifiers'); then the two classifiers' agreement
+    (:func:`agreement_markdown`) and the roughness of decoded letters (``smoothness`` rows),
+    when given."""
     kinds = list(dict.fromkeys(r["kind"] for r in rows))
     parts = [
         "# Cross-modal coherence",
         setup,
-        "Fraction of generated samples that the independent classifier assigns to the "
+        "Fraction of generated samples that the first independent classifier assigns to the "
         "conditioning class (labels: the decoded label's accuracy). Reconstruction cells "
-        "(target among the inputs) are marked with *. " + FOLDED_NOTE,
+        "(target among the inputs) are marked with *. " + FOLDED_NOTE + mark_note(rows),
         _classifier_lines(classifier_info),
     ]
     header = ["generated", *[h for k in kinds for h in (k, f"{k}, folded")]]
@@ -241,11 +251,13 @@ def coherence_markdown(
                 [f"{LETTER[target]} given {{{given}}}{star}"]
                 + [
                     _rate(by_key.get((target, given, k)), key)
+                    + mark(by_key.get((target, given, k)), key)
                     for k in kinds
                     for key in ("coherence", "coherence_folded")
                 ]
             )
         parts += [f"## {name}: {title(family)}", _md_table(header, body)]
+    parts += agreement_markdown(rows, title, _md_table)
     if smoothness:
         parts += smoothness_markdown(smoothness)
     return "\n\n".join(parts) + "\n"
@@ -271,11 +283,19 @@ def smoothness_markdown(rows: list[dict]) -> list[str]:
     ]
 
 
+FIRST_READERS = {"traj": "first: MLP on the coordinates", "image": "first: CNN on the pixels"}
+
+
 def _classifier_lines(info: dict) -> str:
-    lines = ["Classifiers (trained on the training split, scored on the real test split):"]
-    for modality, meta in info.items():
+    lines = [
+        "Classifiers (trained on the training split, scored on the real test split, i.e. on "
+        "held-out writers):"
+    ]
+    for name, meta in info.items():
+        reader = meta.get("reader", FIRST_READERS.get(name))
+        reader = f" ({reader})" if reader else ""
         lines.append(
-            f"- {modality}: test accuracy {meta['test_accuracy']:.3f}"
+            f"- {name}{reader}: test accuracy {meta['test_accuracy']:.3f}"
             + (
                 f" (case twins folded: {meta['test_folded_accuracy']:.3f})"
                 if "test_folded_accuracy" in meta

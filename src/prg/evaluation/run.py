@@ -15,7 +15,11 @@ targets under a Gaussian of std ``likelihood.traj_std`` (default 1.0, the paper'
 importance samples; coherence ``coherence_T_given_S`` (exact class) and
 ``coherence_folded_T_given_S`` (shape twins such as o/O/0 counted right), ``_sampled_`` for the
 temperature-1 kind, ``_imputed_`` for MUSE's posterior mean after ``coherence.impute_steps``
-rounds of imputing the missing modalities (``coherence_folded_imputed_T_given_S``);
+rounds of imputing the missing modalities (``coherence_folded_imputed_T_given_S``); the second
+classifier's ``coherence_second_T_given_S`` and ``coherence_folded_second_T_given_S``, and the
+share of samples both classifiers read alike, ``agreement_T_given_S`` (same class) and
+``agreement_folded_T_given_S`` (same shape-twin group), for generated trajectories and images
+(:mod:`prg.evaluation.second_readers`; ``classifier/<reader>/test_accuracy`` for all four readers);
 ``roughness_ratio_T_given_S`` / ``_T_given_I`` (decoded letters' median roughness over the test
 letters', whose median is ``test_split/roughness``; ``roughness_ratio_imputed_T_given_S`` ...).
 """
@@ -38,12 +42,14 @@ from prg.checks import FAMILIES
 from prg.data.datamodule import check_model_shapes
 from prg.data.store import load_split
 from prg.errors import UsageError
+from prg.evaluation.agreement import METRIC_SECOND_KEYS, SECOND_KEYS, agreement, second_metric_key
 from prg.evaluation.classifiers import MODALITIES as CLASSIFIED
-from prg.evaluation.classifiers import ensure_classifiers, load_classifier
+from prg.evaluation.classifiers import ensure_classifiers, load_classifier, predict
 from prg.evaluation.coherence import (
     coherence_cells,
     folded_correct,
     generated_classes,
+    generated_readings,
     generated_samples,
     per_class_rate,
     samples,
@@ -55,6 +61,7 @@ from prg.evaluation.likelihood import (
     estimate_cell_multi,
 )
 from prg.evaluation.modes import LIKENESS_MEASURES
+from prg.evaluation.second_readers import Reader, ensure_second_readers
 from prg.evaluation.settings import IMPUTED, CoherenceSettings, EvaluationSettings
 from prg.evaluation.smoothness import median_roughness
 from prg.evaluation.styles import style_summary
@@ -100,6 +107,8 @@ class Evaluation:
     report_dir: Path | None = None
     # (model, target, given subset, kind) -> coherence per class, for the figures
     per_class: dict[tuple[str, str, str, str], np.ndarray] = field(default_factory=dict)
+    # modality -> the first and second classifier (batch -> class ids), for the figures
+    readers: dict[str, tuple] = field(default_factory=dict)
 
 
 # ---- inputs ----------------------------------------------------------------------------------
@@ -227,9 +236,19 @@ def generation_kinds(
 
 
 def coherence_rows(
-    models: Models, classifiers: Mapping[str, Any], test: Data, settings: EvaluationSettings
+    models: Models,
+    classifiers: Mapping[str, Any],
+    test: Data,
+    settings: EvaluationSettings,
+    second: Mapping[str, Reader] | None = None,
 ) -> tuple[list[dict], dict]:
-    """Rows per (model, target, subset, kind), and per-class rates for the figures."""
+    """Rows per (model, target, subset, kind), and per-class rates for the figures.
+
+    ``coherence`` and ``coherence_folded`` are the first classifiers' (``classifiers``); with
+    ``second`` readers (:func:`~prg.evaluation.second_readers.ensure_second_readers`) each row of
+    a generated trajectory or image also holds the second reading and the agreement of the two
+    (:func:`~prg.evaluation.agreement.agreement`); rows of generated labels hold None there.
+    """
     data = subset(test, settings.n_test, settings.seed)
     labels = data[LABEL]
     jobs = [
@@ -242,18 +261,30 @@ def coherence_rows(
     for name, model, target, given, kind, temperature, steps in _progress(
         jobs, "coherence cells", settings.progress
     ):
-        predicted = generated_classes(
+        readers = []
+        if target in classifiers:
+            first = classifiers[target]
+            readers.append(lambda x, first=first: predict(first, x))
+            if second and target in second:
+                readers.append(second[target].read)
+        readings = generated_readings(
             model,
             target,
             given,
             data,
-            classifiers,
+            readers,
             temperature,
             settings.coherence.batch_size,
             settings.seed,
             steps,
         )
+        predicted = readings[:, 0]
         correct = predicted == labels
+        both = (
+            agreement(predicted, readings[:, 1], labels)
+            if readings.shape[1] > 1
+            else dict.fromkeys(SECOND_KEYS)
+        )
         rows.append(
             {
                 "model": name,
@@ -264,6 +295,7 @@ def coherence_rows(
                 "temperature": temperature,
                 "coherence": correct.float().mean().item(),
                 "coherence_folded": folded_correct(predicted, labels).float().mean().item(),
+                **both,
                 "n": len(correct),
             }
         )
@@ -401,6 +433,9 @@ def metrics_of(result: Evaluation) -> dict[str, Any]:
         metrics[f"{row['model']}/{_metric_key(row, folded=True)}"] = round(
             row["coherence_folded"], 4
         )
+        for key in METRIC_SECOND_KEYS:
+            if row.get(key) is not None:
+                metrics[f"{row['model']}/{second_metric_key(row, key)}"] = round(row[key], 4)
     for row in result.smoothness:
         kind = "" if row.get("kind", "mean") == "mean" else f"{row['kind']}_"
         given = row["given"].replace(",", "")
@@ -535,8 +570,18 @@ def run_evaluation(
         classifiers = ensure_classifiers(
             data_dir, classifier_dir, settings.classifier, progress=settings.progress
         )
+        second = ensure_second_readers(
+            data_dir, classifier_dir, classifiers, settings.classifier.seed
+        )
         result.classifiers = classifier_meta(classifier_dir)
-        result.coherence, result.per_class = coherence_rows(models, classifiers, test, settings)
+        result.classifiers.update({r.name: r.meta for r in second.values()})
+        result.coherence, result.per_class = coherence_rows(
+            models, classifiers, test, settings, second
+        )
+        result.readers = {
+            m: (lambda x, first=classifiers[m]: predict(first, x), reader.read)
+            for m, reader in second.items()
+        }
         result.smoothness = roughness_rows(models, test, settings)
         result.shifted_images = shifted_image_rows(models, classifiers, test, settings)
     if "likeness" in settings.parts:

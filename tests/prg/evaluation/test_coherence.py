@@ -26,3 +26,27 @@ def test_folded_counts_a_shape_twin_as_right_and_nothing_else():
     predicted = torch.tensor([ALPHABET.index(p) for _, p, _ in pairs])
     labels = torch.tensor([ALPHABET.index(t) for t, _, _ in pairs])
     assert folded_correct(predicted, labels).tolist() == [ok for *_, ok in pairs]
+
+
+def test_readings_share_the_generated_samples_and_labels_have_one():
+    from prg.evaluation.coherence import generated_readings
+
+    class Echo:
+        """A stand-in model: the generated trajectory's first value is the input label."""
+
+        def generate(self, inputs, target, n, temperature, impute_steps):
+            label = inputs["label"]
+            if target == "label":
+                return torch.nn.functional.one_hot(label, 62).float()[None]
+            out = torch.zeros(len(label), 200)
+            out[:, 0] = label.float()
+            return out[None]
+
+    data = {"label": torch.arange(7)}
+    readers = [lambda x: x[:, 0].long(), lambda x: x[:, 0].long() + 1]
+    readings = generated_readings(Echo(), "traj", ("label",), data, readers, batch_size=3)
+    assert readings.shape == (7, 2)
+    assert readings[:, 0].tolist() == list(range(7))
+    assert (readings[:, 1] - readings[:, 0]).tolist() == [1] * 7
+    labels = generated_readings(Echo(), "label", ("label",), data, readers, batch_size=3)
+    assert labels.shape == (7, 1) and labels[:, 0].tolist() == list(range(7))

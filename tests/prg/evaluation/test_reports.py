@@ -66,3 +66,32 @@ def test_coherence_report_has_exact_and_folded_columns_and_the_smoothness_sectio
 def test_robustness_shows_folded_in_parentheses():
     text = robustness_markdown(COHERENCE, "mean", "setup")
     assert _table_line(text, "| PRG_MUSE") == "| PRG_MUSE(T,S,I) | 0.512 (0.688) | 0.875 (0.900) |"
+
+
+def test_coherence_report_shows_both_classifiers_and_their_agreement():
+    second = {
+        "coherence_second": 0.25,
+        "coherence_folded_second": 0.3751,
+        "agreement": 0.4,
+        "agreement_folded": 0.5012,
+        "difference": 0.2624,
+        "difference_folded": 0.3125,
+        "coherence_folded_both": 0.2987,
+    }
+    rows = [{**row, **second} for row in COHERENCE]
+    rows.append(
+        {**COHERENCE[0], "target": "label", "given": "T", **dict.fromkeys(second)}  # no 2nd
+    )
+    info = {
+        **CLASSIFIERS,
+        "traj_rendered": {"test_accuracy": 0.8123, "reader": "second: drawn"},
+    }
+    text = coherence_markdown(rows, info, "setup")
+    assert "- traj_rendered (second: drawn): test accuracy 0.812" in text
+    section = text.split("## Two classifiers: agreement")[1]
+    line = _table_line(section, "| T given {S} |")
+    assert line.count("0.688 / 0.375 (agree 0.50, both 0.30)") == 1  # mean
+    assert "0.438 / 0.375" in line  # sampled: the first classifier's own folded rate
+    assert "S given" not in section  # a generated label has no second reading
+    assert "| T given {S} | 0.512 | 0.688 † |" in text  # first classifier, disagreement marked
+    assert "Two classifiers" not in coherence_markdown(COHERENCE, CLASSIFIERS, "setup")
