@@ -7,8 +7,10 @@ exclusive ``flock`` on a hidden file beside the folder (``models/.muse.lock`` fo
 for the same folder is refused at once with one line naming the holder (command, pid, host,
 start time, written into the lock file by the holder). The kernel releases the lock when the
 holder's file descriptor closes, so a run that dies in any way (``SIGKILL`` and power loss
-included) never leaves a folder locked; the lock file itself stays (empty once released: it is
-never removed, as a second run may already be waiting on it).
+included) never leaves a folder locked. A run that ends removes its lock file while it still
+holds it (so a refused or finished run leaves nothing beside its outputs; one killed leaves an
+empty, unlocked file); a run that locked a file another run removed meanwhile sees that the
+path no longer names its file and tries again.
 
 The lock is advisory: it keeps out the project's commands, not other programs.
 """
@@ -71,14 +73,29 @@ def folder_lock(folder: str | os.PathLike, key: str) -> Iterator[Path]:
                 f"{key} {folder} is being written by another run ({holder}): wait for it to "
                 f"end or give another {key}"
             ) from None
+        if not _names(path, fd):  # its holder removed it as we opened it: lock the new one
+            os.close(fd)
+            fd = -1
+            with folder_lock(folder, key) as locked:
+                yield locked
+            return
         os.ftruncate(fd, 0)
         os.pwrite(fd, (_holder() + "\n").encode(), 0)
         try:
             yield folder
         finally:
-            os.ftruncate(fd, 0)  # released: no holder to name
+            path.unlink(missing_ok=True)  # still held: no other run can be using this file
     finally:
-        os.close(fd)  # releases the lock
+        if fd >= 0:
+            os.close(fd)  # releases the lock
+
+
+def _names(path: Path, fd: int) -> bool:
+    """Whether ``path`` still names the open file ``fd``."""
+    try:
+        return os.stat(path).st_ino == os.fstat(fd).st_ino
+    except FileNotFoundError:
+        return False
 
 
 @contextmanager

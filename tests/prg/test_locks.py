@@ -49,7 +49,26 @@ def test_a_second_holder_is_refused_naming_the_first_until_it_is_killed(tmp_path
     with folder_lock(folder, "export_dir"):
         assert f"pid {os.getpid()} " in lock_path(folder).read_text()
         assert not folder.exists()  # the folder holds outputs only: the lock is beside it
-    assert lock_path(folder).read_text() == ""  # released: no holder named any more
+    assert not lock_path(folder).exists()  # released: nothing left beside the outputs
+
+
+def test_a_lock_file_removed_while_being_taken_is_taken_again(tmp_path, monkeypatch):
+    """A run that opened the lock file just as its holder removed it locks the new file."""
+    import prg.locks
+
+    folder = tmp_path / "out"
+    real_names, calls = prg.locks._names, []
+
+    def removed_once(path, fd):
+        calls.append(path)
+        if len(calls) == 1:  # as if the previous holder unlinked it right after our open
+            path.unlink()
+        return real_names(path, fd)
+
+    monkeypatch.setattr(prg.locks, "_names", removed_once)
+    with folder_lock(folder, "export_dir"):
+        assert len(calls) == 2
+        assert f"pid {os.getpid()} " in lock_path(folder).read_text()
 
 
 def test_the_same_folder_under_two_keys_is_locked_once(tmp_path):

@@ -91,7 +91,11 @@ def test_nonsense_numbers_are_named(tmp_path, override, match):
             {"data.synthetic.width": "[0.0,1.0]"},
             "data.synthetic: width and size must be > 0, roundness/jitter >= 0",
         ),
-        ({"data.name": "../escape"}, "data.name '../escape' must be a plain folder name"),
+        (
+            {"data.name": "../escape"},
+            "data.name '../escape' is a path, not a plain folder name: accepted are printable "
+            "characters without '/', not starting with '.', at most 255 bytes",
+        ),
     ],
 )
 def test_a_refused_setting_is_named_by_its_config_path(override, message):
