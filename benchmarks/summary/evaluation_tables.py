@@ -224,12 +224,15 @@ def likeness_markdown(evaluate: dict) -> str:
             shown = "**hand (default)**"
         elif mode == "mean":
             shown = "mean (the paper)"
-        cells = [f"{evaluate[f'{family}/likeness_{mode}_{m}']:.2f}" for m in LIKENESS_MEASURES]
+        cells = [
+            number(evaluate, f"{family}/likeness_{mode}_{m}", ".2f") for m in LIKENESS_MEASURES
+        ]
         body.append([name, shown, *cells])
     lines = [
         "**Likeness to held-out writers** (`reports/likeness.md`): 10 letters per class from "
         "their labels against the test split's letters; legible = read right by the trajectory "
-        "classifier (folded); k-NN precision / recall (k = 3); C2ST = linear classifier's "
+        "classifier (folded), legible_shape = by the second reader (the letter drawn, then read by "
+        "the image classifier); k-NN precision / recall (k = 3); C2ST = linear classifier's "
         "accuracy telling them from real (0.5 ideal); spread = within-class distance over the "
         "real letters' (1 ideal). The first rows are real letters scored the same way.",
         "",

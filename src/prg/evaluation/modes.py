@@ -50,8 +50,10 @@ class Mode:
     impute_steps: int = 0
 
 
-#: The measures of each row of the likeness table.
-LIKENESS_MEASURES = ("legible", "precision", "recall", "c2st", "spread")
+#: The measures of each row of the likeness table: ``legible`` read by the trajectory classifier
+#: (an MLP on the points, which also reads their order), ``legible_shape`` by the second reader
+#: (the letter drawn, then read by the image classifier: the shape alone), both folded.
+LIKENESS_MEASURES = ("legible", "legible_shape", "precision", "recall", "c2st", "spread")
 
 #: The modes every family is scored in (``imputed`` only where the family imputes).
 MODES = (
@@ -133,12 +135,19 @@ def score(
     real: Mapping[int, np.ndarray],
     classify: Callable[[np.ndarray], np.ndarray],
     seed: int,
+    read_shape: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> dict[str, float]:
-    """The measures of one row: ``legible`` over every generated letter, the rest per class
-    against ``real`` and averaged (:func:`prg.evaluation.likeness.likeness`)."""
+    """The measures of one row: ``legible`` (``classify``) and ``legible_shape`` (``read_shape``;
+    NaN without it) over every generated letter, the rest per class against ``real`` and
+    averaged (:func:`prg.evaluation.likeness.likeness`)."""
     labels = np.concatenate([np.full(len(v), c) for c, v in generated.items()])
     letters = np.concatenate([np.asarray(v, dtype=np.float32) for v in generated.values()])
-    row = {"legible": folded_accuracy(classify(letters), labels)}
+    row = {
+        "legible": folded_accuracy(classify(letters), labels),
+        "legible_shape": (
+            folded_accuracy(read_shape(letters), labels) if read_shape else float("nan")
+        ),
+    }
     row.update(likeness(real, generated, seed=seed))
     return row
 
@@ -151,6 +160,7 @@ def mode_rows(
     n_per_class: int = 10,
     seed: int = 0,
     progress: Callable[[str], None] | None = None,
+    shape_reader: Callable[[torch.Tensor], torch.Tensor] | None = None,
 ) -> list[dict]:
     """The likeness table: one row per reference split, then per family x mode.
 
@@ -160,17 +170,25 @@ def mode_rows(
     test : the test split's arrays (the real letters every row is compared with)
     references : row name -> a split's arrays (e.g. the validation split's)
     classifier : the project's trajectory classifier
+    shape_reader : the second trajectory reader (batch -> class ids,
+        :class:`prg.evaluation.second_readers.RenderedReader`), for ``legible_shape``
     """
     real = by_class(*originals(test)[:2])
 
     def classify(letters: np.ndarray) -> np.ndarray:
         return predict(classifier, torch.from_numpy(letters)).numpy()
 
+    def read_shape(letters: np.ndarray) -> np.ndarray:
+        return np.asarray(shape_reader(torch.from_numpy(letters)))
+
+    def scored(generated, real):
+        return score(generated, real, classify, seed, read_shape if shape_reader else None)
+
     rows = []
     for name, arrays in references.items():
         traj, labels, _ = originals(arrays)
         sample = subsample(traj, labels, n_per_class, seed)
-        rows.append({"family": "real", "mode": name, **score(sample, real, classify, seed)})
+        rows.append({"family": "real", "mode": name, **scored(sample, real)})
     for family, (model, bank) in models.items():
         for mode in MODES:
             if mode.impute_steps and not model.imputes_missing:
@@ -183,7 +201,5 @@ def mode_rows(
                 progress(f"{family} {mode.name}")
             letters = generate_by_class(model, mode, n_per_class, seed, bank)
             generated = {c: letters[:, c] for c in range(NUM_CLASSES)}
-            rows.append(
-                {"family": family, "mode": mode.name, **score(generated, real, classify, seed)}
-            )
+            rows.append({"family": family, "mode": mode.name, **scored(generated, real)})
     return rows

@@ -467,7 +467,7 @@ def likeness_markdown(rows: list[dict], settings: EvaluationSettings) -> str:
         [
             "real letters" if r["family"] == "real" else title(r["family"]),
             f"**{r['mode']}**" if "default" in r["mode"] else r["mode"],
-            *(f"{r[m]:.2f}" for m in LIKENESS_MEASURES),
+            *(f"{r[m]:.2f}" if r[m] == r[m] else "-" for m in LIKENESS_MEASURES),
         ]
         for r in rows
     ]
@@ -479,7 +479,9 @@ def likeness_markdown(rows: list[dict], settings: EvaluationSettings) -> str:
             "split), compared class by class with the test split's letters (writers no model "
             "saw) in the normalised 200-d trajectory space, and averaged over the classes. "
             "legible: read as their class by the project's trajectory classifier, shape twins "
-            "folded; precision / recall: k-NN (k = 3) precision and recall of Kynkäänniemi et "
+            "folded; legible_shape: the same, read by the second reader (the letter drawn as the "
+            "dataset's images are, then read by the image classifier: the shape alone, not the "
+            "order of the points, which the first also reads); precision / recall: k-NN (k = 3) precision and recall of Kynkäänniemi et "
             "al. 2019; c2st: cross-validated accuracy of a linear classifier telling them from "
             "the real letters (0.5: indistinguishable); spread: median within-class distance, "
             "generated over real (1: as varied as writers). **mean (paper)** is the paper's "

@@ -453,7 +453,8 @@ def metrics_of(result: Evaluation) -> dict[str, Any]:
     for row in result.likeness:
         mode = likeness_key(row["mode"])
         for measure in LIKENESS_MEASURES:
-            metrics[f"{row['family']}/likeness_{mode}_{measure}"] = round(row[measure], 4)
+            if _finite(row[measure]):
+                metrics[f"{row['family']}/likeness_{mode}_{measure}"] = round(row[measure], 4)
     for row in result.kinematics:
         group = row["group"].replace(": ", "_").replace(" ", "_").replace("(", "").replace(")", "")
         for measure in ("beta", "speed_cv", "lognormal_snr_db", "sparc", "peaks_per_s"):
@@ -474,8 +475,11 @@ def likeness_key(mode: str) -> str:
     )
 
 
-def likeness_part(models: Models, data_dir: Path, classifier, settings: EvaluationSettings):
-    """The likeness table (:func:`prg.evaluation.modes.mode_rows`) of every model."""
+def likeness_part(
+    models: Models, data_dir: Path, classifier, settings: EvaluationSettings, shape_reader=None
+):
+    """The likeness table (:func:`prg.evaluation.modes.mode_rows`) of every model, legibility
+    read by the trajectory ``classifier`` and by the second reader ``shape_reader``."""
     from prg.evaluation.modes import mode_rows
 
     names = {"val": "val writers", "train": "train originals"}
@@ -498,6 +502,7 @@ def likeness_part(models: Models, data_dir: Path, classifier, settings: Evaluati
         settings.likeness.n_per_class,
         settings.seed,
         progress=(lambda what: log.info("likeness: %s", what)) if settings.progress else None,
+        shape_reader=shape_reader,
     )
 
 
@@ -588,7 +593,12 @@ def run_evaluation(
         classifiers = ensure_classifiers(
             data_dir, classifier_dir, settings.classifier, progress=settings.progress
         )
-        result.likeness = likeness_part(models, data_dir, classifiers[TRAJ], settings)
+        second = ensure_second_readers(
+            data_dir, classifier_dir, classifiers, settings.classifier.seed
+        )
+        result.likeness = likeness_part(
+            models, data_dir, classifiers[TRAJ], settings, second[TRAJ].read
+        )
     if "styles" in settings.parts:
         result.styles = styles_part(models, data_dir, settings)
     if "kinematics" in settings.parts:

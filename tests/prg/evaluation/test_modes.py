@@ -40,6 +40,24 @@ def test_real_letters_scored_against_themselves_are_a_perfect_row(setting):
         assert row[measure] == pytest.approx(1.0), measure
 
 
+def test_legible_shape_is_the_second_readers_folded_rate_and_absent_without_one(setting):
+    test = setting[2]
+    classifier = NearestLetter(test["traj"], test["label"])
+    alone = mode_rows({}, test, {"itself": test}, classifier, n_per_class=4)[0]
+    assert alone["legible_shape"] != alone["legible_shape"]  # NaN: no second reader given
+
+    def one_class(letters):  # reads every letter as class 10 ('A'; no shape twin)
+        return torch.full((len(letters),), 10)
+
+    row = mode_rows({}, test, {"itself": test}, classifier, 4, shape_reader=one_class)[0]
+    labels = test["label"][~test["augmented"]] if "augmented" in test else test["label"]
+    classes = sorted(set(labels.tolist()))
+    # 4 letters of each class present (or all of a class with fewer), only class 10 read right
+    sizes = {c: min(4, int((labels == c).sum())) for c in classes}
+    assert row["legible_shape"] == pytest.approx(sizes.get(10, 0) / sum(sizes.values()))
+    assert row["legible"] == pytest.approx(1.0)  # the first reader is unchanged
+
+
 def test_every_mode_is_a_row_and_the_posterior_mean_has_no_spread(setting):
     model, bank, test = setting
     classifier = NearestLetter(test["traj"], test["label"])
