@@ -6,12 +6,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from prg.checks import PAPER_FAMILIES
 from prg.files import write_bytes, write_json
 
 from .common import CONVERGED, DEMO, ROOT, SummaryError, read_json
 
 # each model's and the classifiers' metrics, relative to the folder that holds ``models/``
-PIPELINE_FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse")  # the paper's: dvc.yaml's train matrix
+PIPELINE_FAMILIES = PAPER_FAMILIES  # dvc.yaml's train matrix and make converged's families
 MODEL_SOURCES = {
     **{f"models_{f}.json": f"models/{f}/metrics.json" for f in PIPELINE_FAMILIES},
     "classifiers.json": "models/classifiers/metrics.json",

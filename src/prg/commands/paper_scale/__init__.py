@@ -48,7 +48,7 @@ Modules
 
 from __future__ import annotations
 
-from prg.checks import FAMILIES
+from prg.checks import PAPER_FAMILIES as FAMILIES  # trained by default
 from prg.commands.paper_scale.command import DATA_NAME, main, run, summary
 from prg.commands.paper_scale.device import cpu_name, resolve_device
 from prg.commands.paper_scale.jobs import (
