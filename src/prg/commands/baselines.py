@@ -268,18 +268,10 @@ def evaluate(
 
 # ---- aggregation -----------------------------------------------------------------------------
 def machine() -> str:
-    """The CPU's model name and core count (``/proc/cpuinfo``)."""
-    import platform
+    """The CPU's model name and core count (:func:`prg.commands.paper_scale.device.cpu_name`)."""
+    from prg.commands.paper_scale.device import cpu_name
 
-    name = ""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                name = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return f"{name or platform.machine()} ({os.cpu_count()} cores)"
+    return cpu_name()
 
 
 def aggregate(
