@@ -1,9 +1,10 @@
 """The project's own files: where the ``conf/`` folder of configs and robot descriptions is, and
-which commit of the code runs (recorded with every dataset, run and report)."""
+which commit of the code runs and on which CPU (recorded with every dataset, run and report)."""
 
 from __future__ import annotations
 
 import os
+import platform
 import subprocess
 from pathlib import Path
 
@@ -47,3 +48,16 @@ def project_path(path: str | os.PathLike, root: str | os.PathLike) -> str:
         except ValueError:
             continue
     return str(absolute)
+
+
+def cpu_name() -> str:
+    """The CPU's model name (``/proc/cpuinfo``), with its core count."""
+    name = ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                name = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{name or platform.processor() or platform.machine()} ({os.cpu_count()} cores)"

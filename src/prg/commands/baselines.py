@@ -44,6 +44,7 @@ from typing import Any
 
 from prg.errors import UsageError
 from prg.files import read_json, staged_outputs, write_json, write_text
+from prg.resources import cpu_name
 
 PROG = "python -m prg.commands.baselines"
 PARTS = "[likelihood,coherence,likeness]"
@@ -267,13 +268,6 @@ def evaluate(
 
 
 # ---- aggregation -----------------------------------------------------------------------------
-def machine() -> str:
-    """The CPU's model name and core count (:func:`prg.commands.paper_scale.device.cpu_name`)."""
-    from prg.commands.paper_scale.device import cpu_name
-
-    return cpu_name()
-
-
 def aggregate(
     folder: Path,
     families: list[str] | None,
@@ -287,7 +281,7 @@ def aggregate(
 
     values = over_seeds.collect(folder, families, seeds)
     agg = over_seeds.aggregate(values)
-    agg["machine"] = machine()
+    agg["machine"] = cpu_name()
     wall = ""
     if started is not None:
         agg["wall_min"] = round((time.time() - started) / 60, 1)

@@ -3,26 +3,10 @@ record (``paper_scale.json``'s ``device``)."""
 
 from __future__ import annotations
 
-import os
-import platform
-from pathlib import Path
-
 from prg.errors import UsageError
+from prg.resources import cpu_name
 
 __all__ = ["cpu_name", "resolve_device"]
-
-
-def cpu_name() -> str:
-    """The CPU's model name (``/proc/cpuinfo``), with its core count."""
-    name = ""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                name = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return f"{name or platform.processor() or platform.machine()} ({os.cpu_count()} cores)"
 
 
 def resolve_device(device: str) -> tuple[str, str]:
