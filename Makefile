@@ -71,8 +71,10 @@ demo: setup ## Run the whole pipeline (dvc repro): data, models, evaluation, Tab
 # $(BASELINES)/ (ignored by git); one MLflow parent run holds the aggregate, each training run is
 # its child. BASELINE_ARGS: Hydra overrides for training and evaluation (e.g. paths.data_dir=...),
 # BASELINE_TRAIN_ARGS for training alone (e.g. trainer.max_epochs=1), BASELINE_EVAL_ARGS for
-# evaluation alone (e.g. likelihood.n_test=50).
+# evaluation alone (e.g. likelihood.n_test=50). BASELINE_JOBS trainings (joblib launcher) and
+# evaluations run at once, each with cores/BASELINE_JOBS torch threads unless OMP_NUM_THREADS is set.
 BASELINES ?= baselines
+BASELINE_JOBS ?= 2
 BASELINE_SEEDS ?= 0,1,2,3,4
 BASELINE_FAMILIES ?= $(foreach f,cvae avae_ts avae_ti muse mvae mmvae mopoe,$(if $(wildcard conf/model/$(f).yaml),$(f)))
 BASELINE_ARGS ?=
@@ -83,14 +85,17 @@ _empty :=
 _space := $(_empty) $(_empty)
 baselines: setup ## Families x 5 seeds (quick), evaluated; mean, 95 % CI, paired tests -> baselines/report/
 	@set -e; started=$$(date +%s); out=$(abspath $(BASELINES)); \
+	case "$(BASELINE_JOBS)" in ''|*[!0-9]*|0) echo "BASELINE_JOBS=$(BASELINE_JOBS): expected a whole number of at least 1" >&2; exit 2;; esac; \
+	threads=$$(( $$(nproc) / $(BASELINE_JOBS) )); export OMP_NUM_THREADS=$${OMP_NUM_THREADS:-$$(( threads > 0 ? threads : 1 ))}; \
 	parent=$$($(BIN)/python -m prg.commands.baselines parent $$out $(BASELINE_ARGS)); \
 	PRG_PARENT_RUN_ID=$$parent $(BIN)/prg-train -m \
 		model=$(subst $(_space),$(_comma),$(strip $(BASELINE_FAMILIES))) seed=$(BASELINE_SEEDS) \
 		experiment=quick 'export_dir='$$out'/seed$${seed}/$${model.name}' \
 		'checkpoint_dir='$$out'/checkpoints/$${model.name}-seed$${seed}' \
-		trainer.enable_progress_bar=false $(BASELINE_ARGS) $(BASELINE_TRAIN_ARGS); \
+		trainer.enable_progress_bar=false $(if $(filter-out 1,$(BASELINE_JOBS)),hydra/launcher=joblib \
+		hydra.launcher.n_jobs=$(BASELINE_JOBS)) $(BASELINE_ARGS) $(BASELINE_TRAIN_ARGS); \
 	$(BIN)/python -m prg.commands.baselines evaluate $$out --families "$(BASELINE_FAMILIES)" \
-		--seeds $(BASELINE_SEEDS) $(BASELINE_ARGS) $(BASELINE_EVAL_ARGS); \
+		--seeds $(BASELINE_SEEDS) --jobs $(BASELINE_JOBS) $(BASELINE_ARGS) $(BASELINE_EVAL_ARGS); \
 	$(BIN)/python -m prg.commands.baselines aggregate $$out --families "$(BASELINE_FAMILIES)" \
 		--seeds $(BASELINE_SEEDS) --started $$started $(BASELINE_ARGS); \
 	echo "Reports: $(BASELINES)/report/index.md (tables, comparisons.csv, comparison.png)"

@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import resource
 import shutil
 import subprocess
 import sys
@@ -229,8 +228,11 @@ def evaluate(
     extra: Sequence[str],
     parent: str | None,
     root: Path,
+    jobs: int = 1,
 ) -> list[tuple[int, str, str]]:
-    """Run ``prg-evaluate`` for each (seed, family) not up to date; (seed, family, what) each."""
+    """Run ``prg-evaluate`` for each (seed, family) not up to date, ``jobs`` at a time;
+    (seed, family, what) each. A failed evaluation lets the running ones finish, starts no
+    more, and exits with its code."""
     from prg.evaluation.seeds import evaluation_dir
 
     check_trained(folder, families, seeds)
@@ -244,26 +246,44 @@ def evaluate(
         code = subprocess.run([_command("prg-evaluate"), *args], env=env).returncode
         if code:
             raise SystemExit(code)
+    pending = []
     for seed in seeds:
         for family in families:
             if up_to_date(folder, seed, family):
                 done.append((seed, family, "up to date"))
-                continue
+            else:
+                pending.append((seed, family))
+    if jobs > 1:  # each evaluation one share of the cores, unless the caller chose
+        env.setdefault("OMP_NUM_THREADS", str(max(1, (os.cpu_count() or 1) // jobs)))
+    running: dict[int, tuple[int, str, float]] = {}
+    failed = 0
+    while pending or running:
+        while pending and len(running) < jobs and not failed:
+            seed, family = pending.pop(0)
             args = evaluate_overrides(folder, family, seed, root, extra)
-            before = resource.getrusage(resource.RUSAGE_CHILDREN)
-            start = time.perf_counter()
-            result = subprocess.run([_command("prg-evaluate"), *args], env=env)
-            wall = time.perf_counter() - start
-            after = resource.getrusage(resource.RUSAGE_CHILDREN)
-            if result.returncode:
-                raise SystemExit(result.returncode)
-            cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-            write_json(
-                evaluation_dir(folder, seed, family) / "timing.json",
-                {"cpu_s": round(cpu, 2), "wall_s": round(wall, 2)},
-            )
-            print(f"seed {seed} {family}: evaluated in {wall / 60:.1f} min ({cpu / 60:.1f} CPU)")
-            done.append((seed, family, "evaluated"))
+            child = subprocess.Popen([_command("prg-evaluate"), *args], env=env)
+            running[child.pid] = (seed, family, time.perf_counter())
+        if not running:
+            break
+        # wait4, not Popen.wait: the finished child's own CPU time, whatever else runs
+        pid, status, usage = os.wait4(-1, 0)
+        if pid not in running:
+            continue
+        seed, family, start = running.pop(pid)
+        wall = time.perf_counter() - start
+        code = os.waitstatus_to_exitcode(status)
+        if code:
+            failed = failed or code
+            continue
+        cpu = usage.ru_utime + usage.ru_stime
+        write_json(
+            evaluation_dir(folder, seed, family) / "timing.json",
+            {"cpu_s": round(cpu, 2), "wall_s": round(wall, 2), "jobs": jobs},
+        )
+        print(f"seed {seed} {family}: evaluated in {wall / 60:.1f} min ({cpu / 60:.1f} CPU)")
+        done.append((seed, family, "evaluated"))
+    if failed:
+        raise SystemExit(failed)
     return done
 
 
@@ -309,6 +329,7 @@ def main(argv: list[str] | None = None) -> int:
         s.add_argument("overrides", nargs="*", help="Hydra overrides (key=value), anywhere")
     e.add_argument("--families", required=True, help="e.g. cvae,avae_ts")
     e.add_argument("--seeds", required=True, help="e.g. 0,1,2,3,4")
+    e.add_argument("--jobs", default="1", help="evaluations at once (default 1)")
     a.add_argument("--families", default=None, help="default: every family evaluated")
     a.add_argument("--seeds", default=None, help="default: every seed<s> folder")
     a.add_argument("--started", type=float, default=None, help="the sweep's start (epoch s)")
@@ -325,6 +346,8 @@ def main(argv: list[str] | None = None) -> int:
             from prg.commands.cli import project_root
 
             families, seeds = names(args.families), seed_list(args.seeds)
+            if not args.jobs.isdigit() or int(args.jobs) < 1:
+                raise UsageError(f"--jobs {args.jobs!r}: expected a whole number of at least 1")
             check_trained(args.dir, families, seeds)
             parent = open_parent(args.dir, args.overrides)
             root = next(
@@ -335,7 +358,7 @@ def main(argv: list[str] | None = None) -> int:
                 ),
                 project_root()[0],
             )
-            evaluate(args.dir, families, seeds, args.overrides, parent, root)
+            evaluate(args.dir, families, seeds, args.overrides, parent, root, int(args.jobs))
         else:
             families = names(args.families) if args.families else None
             seeds = seed_list(args.seeds) if args.seeds else None

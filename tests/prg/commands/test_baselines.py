@@ -82,12 +82,84 @@ def test_evaluate_refuses_a_sweep_that_was_not_trained(tmp_path, capsys):
     assert len(err) == 1 and "seed0/cvae/model.ckpt does not exist" in err[0]
 
 
+# A stand-in for prg-evaluate (the real one is run by the slow end-to-end test): it records when
+# it ran, burns a known amount of CPU, writes metrics.json into its report_dir, and fails for the
+# family named in FAIL_FAMILY.
+_STAND_IN = """#!{python}
+import json, os, sys, time
+args = dict(a.split("=", 1) for a in sys.argv[1:])
+if args.get("parts") == "[classifiers]":
+    sys.exit(0)
+start = time.time()
+end = time.process_time() + 0.3
+while time.process_time() < end:
+    pass
+time.sleep(0.5)
+if args["families"] == "[" + os.environ.get("FAIL_FAMILY", "") + "]":
+    sys.exit(3)
+os.makedirs(args["report_dir"], exist_ok=True)
+with open(os.path.join(args["report_dir"], "metrics.json"), "w") as f:
+    json.dump({{"start": start, "end": time.time(), "threads": os.environ["OMP_NUM_THREADS"]}}, f)
+"""
+
+
+def _stand_in_sweep(tmp_path, monkeypatch, families, seed_ids):
+    import sys
+
+    program = tmp_path / "prg-evaluate"
+    program.write_text(_STAND_IN.format(python=sys.executable))
+    program.chmod(0o755)
+    monkeypatch.setattr(baselines, "_command", lambda name: str(program))
+    monkeypatch.delenv("OMP_NUM_THREADS", raising=False)
+    root = tmp_path / "b"
+    for s in seed_ids:
+        for f in families:
+            (root / f"seed{s}" / f).mkdir(parents=True)
+            (root / f"seed{s}" / f / "model.ckpt").write_bytes(b"x")
+    return root
+
+
+def test_evaluations_run_jobs_at_a_time_each_timed_by_its_own_cpu(tmp_path, monkeypatch):
+    root = _stand_in_sweep(tmp_path, monkeypatch, ["cvae", "muse"], [0, 1])
+    done = baselines.evaluate(root, ["cvae", "muse"], [0, 1], [], None, tmp_path, jobs=2)
+    assert sorted(done) == [(s, f, "evaluated") for s in (0, 1) for f in ("cvae", "muse")]
+    runs = []
+    for s in (0, 1):
+        for f in ("cvae", "muse"):
+            where = seeds.evaluation_dir(root, s, f)
+            metrics = json.loads((where / "metrics.json").read_text())
+            timing = json.loads((where / "timing.json").read_text())
+            runs.append((metrics["start"], metrics["end"]))
+            # its own CPU (about 0.3 s of spinning), not its neighbour's too
+            assert 0.25 <= timing["cpu_s"] < 0.55 and timing["wall_s"] >= 0.75
+            assert timing["jobs"] == 2 and metrics["threads"] == str(max(1, os.cpu_count() // 2))
+    runs.sort()
+    assert all(later[0] < earlier[1] for earlier, later in zip(runs[::2], runs[1::2]))  # overlap
+    assert baselines.evaluate(root, ["cvae", "muse"], [0, 1], [], None, tmp_path, jobs=2) == [
+        (s, f, "up to date") for s in (0, 1) for f in ("cvae", "muse")
+    ]
+
+
+def test_a_failed_evaluation_lets_the_running_one_finish_and_starts_no_more(
+    tmp_path, monkeypatch
+):
+    root = _stand_in_sweep(tmp_path, monkeypatch, ["cvae", "muse"], [0, 1, 2])
+    monkeypatch.setenv("FAIL_FAMILY", "cvae")
+    with pytest.raises(SystemExit) as stopped:
+        baselines.evaluate(root, ["cvae", "muse"], [0, 1, 2], [], None, tmp_path, jobs=2)
+    assert stopped.value.code == 3
+    # seed 0: cvae failed beside muse, which finished; nothing after them was started
+    assert (seeds.evaluation_dir(root, 0, "muse") / "timing.json").is_file()
+    assert not any((seeds.evaluation_dir(root, s, "muse")).exists() for s in (1, 2))
+
+
 @pytest.mark.parametrize(
     "argv, expected",
     [
         (["aggregate", "{b}", "--seeds", "x"], "--seeds"),
         (["aggregate", "{b}", "notanoverride"], "key=value"),
         (["aggregate", "{b}", "--families", "cvae", "--seeds", "7", "--no-mlflow"], "seed7"),
+        (["evaluate", "{b}", "--families", "cvae", "--seeds", "0", "--jobs", "0"], "--jobs"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, argv, expected):
