@@ -140,9 +140,7 @@ def test_evaluations_run_jobs_at_a_time_each_timed_by_its_own_cpu(tmp_path, monk
     ]
 
 
-def test_a_failed_evaluation_lets_the_running_one_finish_and_starts_no_more(
-    tmp_path, monkeypatch
-):
+def test_a_failed_evaluation_lets_the_running_one_finish_and_starts_no_more(tmp_path, monkeypatch):
     root = _stand_in_sweep(tmp_path, monkeypatch, ["cvae", "muse"], [0, 1, 2])
     monkeypatch.setenv("FAIL_FAMILY", "cvae")
     with pytest.raises(SystemExit) as stopped:
