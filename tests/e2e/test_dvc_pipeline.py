@@ -65,8 +65,28 @@ def test_dvc_repro_prepare_equals_prg_prepare_and_is_idempotent(tmp_path):
     metrics = _dvc(repo, "metrics", "show")
     assert "train_samples" in metrics.stdout
 
+    # the same data built from another commit (a fresh clone's) differ only in the commit, which
+    # is recorded in provenance.json, not in the manifest; DVC does not hash provenance.json, so
+    # the dataset's lock entry does not move and nothing downstream reruns
+    lock = (repo / "dvc.lock").read_text()
+    assert "git_commit" not in (by_dvc / "manifest.json").read_text()
+    provenance = by_dvc / "provenance.json"
+    recorded = yaml.safe_load(provenance.read_text())
+    recorded["code_version"]["git_commit"] = "f" * 40  # as built on another commit
+    provenance.write_text(yaml.safe_dump(recorded))
+    status = _dvc(repo, "status", "prepare")
+    assert status.returncode == 0 and "up to date" in status.stdout, status.stdout
+    again = _dvc(repo, "repro", "prepare")
+    assert "didn't change" in again.stdout or "up to date" in again.stdout, again.stdout
+    assert (repo / "dvc.lock").read_text() == lock
+
     # a DVC remote (a folder here; s3://, ssh://, ... alike) restores the outputs elsewhere
-    originals = {p.name: p.read_bytes() for p in by_dvc.iterdir() if p.is_file()}
+    # (provenance.json is a run fact of the build, neither hashed nor pushed)
+    originals = {
+        p.name: p.read_bytes()
+        for p in by_dvc.iterdir()
+        if p.is_file() and p.name != "provenance.json"
+    }
     assert _dvc(repo, "remote", "add", "-d", "store", str(tmp_path / "remote")).returncode == 0
     pushed = _dvc(repo, "push")
     assert pushed.returncode == 0, pushed.stdout + pushed.stderr

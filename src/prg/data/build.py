@@ -46,6 +46,7 @@ from prg.signals import deferred
 log = logging.getLogger(__name__)
 
 SOURCES = ("synthetic", "uji")
+PROVENANCE = "provenance.json"  # run facts of a build, beside manifest.json; not hashed by DVC
 _RENDER_CHUNK = 2048  # trajectories per progress step of the render stage
 
 
@@ -308,6 +309,9 @@ def build_dataset(
             data, settings, input_info, selection, assignment, split_arrays, fit_stats
         )
         write_json(tmp / "manifest.json", manifest)
+        # the code that built it, apart from the manifest: a run fact, left out of DVC's hash of
+        # the folder (.dvcignore), so that the same data built from another commit hash the same
+        write_json(tmp / PROVENANCE, provenance())
         lap("write")
         if figures:
             from prg.data.figures import write_dataset_figures
@@ -351,8 +355,12 @@ def _manifest(data, settings, input_info, selection, assignment, split_arrays, f
             "label": "int64 (N,), 0-9 -> 0..9, A-Z -> 10..35, a-z -> 36..61",
         },
         "config": data,
-        "code_version": {"prg": prg.__version__, "git_commit": git_commit()},
     }
+
+
+def provenance() -> dict[str, Any]:
+    """The run facts of a build (``provenance.json``): the package and the git commit."""
+    return {"code_version": {"prg": prg.__version__, "git_commit": git_commit()}}
 
 
 def dataset_metrics(manifest: dict[str, Any]) -> dict[str, Any]:

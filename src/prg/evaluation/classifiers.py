@@ -375,18 +375,18 @@ def load_classifier(path: str | os.PathLike) -> tuple[nn.Module, dict[str, Any]]
 
 
 def data_fingerprint(data_dir: str | os.PathLike) -> str:
-    """SHA-256 of a prepared dataset's ``manifest.json`` without its ``code_version``.
+    """SHA-256 of a prepared dataset's ``manifest.json``.
 
     The manifest records the input checksum, the full data config, the writer split and the
-    per-class counts, so it changes whenever the data do; the code version is left out because a
-    new commit that rebuilds the same data should not force retraining.
+    per-class counts, so it changes whenever the data do; the code version is not in it
+    (``provenance.json`` beside it), because a new commit that rebuilds the same data should not
+    force retraining.
     """
     path = Path(data_dir) / "manifest.json"
     missing = f"no dataset manifest at {path}: run `prg-prepare` first"
     manifest = read_json(path, "dataset manifest", missing)
     if not isinstance(manifest, dict):
         raise UsageError(f"dataset manifest {path} is not a JSON object")
-    manifest.pop("code_version", None)
     return hashlib.sha256(json.dumps(manifest, sort_keys=True).encode()).hexdigest()
 
 
