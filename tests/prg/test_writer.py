@@ -161,7 +161,10 @@ def test_a_word_is_laid_out_connected_and_reproduced_by_one_dmp():
     result = writer.generate(Perception("ab cd", label_inputs("ab cd")))
     word, path = result.word, result.rollout
     assert [c for c, _ in word.letters] == list("abcd")
-    assert word.segment_kinds.count("connection") == 2 and word.segment_kinds.count("space") == 1
+    # three joins: the space between the words, and within them a connection each, or a pen-up
+    # travel where the writer lifts (prg.pipeline.joins.lifts_pen: untrained letters)
+    kinds = word.segment_kinds
+    assert kinds.count("connection") + kinds.count("space") == 3 and kinds.count("space") >= 1
     assert word.dmp.n_basis >= 20 and word.duration_s > 0
     demo, _ = timed_body(word.body, result.settings)
     assert path.shape == demo.shape

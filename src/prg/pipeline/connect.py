@@ -86,6 +86,8 @@ All lengths are in the units of the inputs (centimetres in the pipeline), angles
 
 from __future__ import annotations
 
+import dataclasses
+
 import itertools
 import math
 from dataclasses import dataclass
@@ -117,12 +119,16 @@ class ConnectionResult:
         the straight joiner and the fallback).
     fallback : bool
         True when ``max_steps`` ran out and the connection was finished by a straight segment.
+    pen_up : bool
+        True for a pen-up travel (a straight path, no ink): between words, or where a writer
+        lifts the pen within one (:func:`prg.pipeline.joins.lifts_pen`).
     """
 
     points: np.ndarray
     steered: int
     target: int
     fallback: bool
+    pen_up: bool = False
 
 
 def _check_points(points, name: str) -> np.ndarray:
@@ -383,7 +389,8 @@ def connect_sequence(
     breaks : sequence of bool, optional
         One per pair (:func:`prg.pipeline.layout.word_breaks`): True where a space separates the
         two letters. Those pairs get the straight pen-up travel (subdivided at ``delta``)
-        whatever ``method`` is.
+        whatever ``method`` is; with ``"hand"``, so do the pairs where a writer lifts the pen
+        (:func:`prg.pipeline.joins.lifts_pen`).
 
     Returns
     -------
@@ -401,11 +408,15 @@ def connect_sequence(
     out = []
     for a, b, pen_up in zip(letters[:-1], letters[1:], breaks):
         if method == "hand" and not pen_up:
-            from prg.pipeline.joins import hand_connection
+            from prg.pipeline.joins import hand_connection, lifts_pen
 
-            out.append(hand_connection(a, b, letters, params))
+            pen_up = lifts_pen(a, b)
+            if not pen_up:
+                out.append(hand_connection(a, b, letters, params))
         elif method == "alg1" and not pen_up:
             out.append(connect_letters(a, b, **params.as_kwargs()))
-        else:
+        elif method == "straight" and not pen_up:
             out.append(straight_connection(a, b, params.delta))
+        if pen_up:
+            out.append(dataclasses.replace(straight_connection(a, b, params.delta), pen_up=True))
     return out

@@ -191,6 +191,35 @@ def closed_exit(points: np.ndarray) -> np.ndarray:
     return points[: cut + 1] if near and descends else points
 
 
+def lifts_pen(prev: np.ndarray, nxt: np.ndarray, margin: float = END_MARGIN) -> bool:
+    """Whether a writer lifts the pen between ``prev`` and ``nxt`` rather than join them.
+
+    A letter that ends on the far side of its own ink from the next letter cannot be joined
+    without going back over or around it: a print hand's ``j``, ``y``, ``g`` or ``p`` ends at
+    the foot of its tail, left of its stem; an ``s`` or an ``x`` at its bottom left; a ``b`` at the
+    foot of its stem, its bowl between the pen and the next letter. Joined, such a stroke arches
+    over the letter or climbs back through it (the demo's print hands wrote "joy" with the j's foot
+    joined over the j to the o). A person writing print lifts the pen there. The rule: the
+    letter ends in its left half (more than half its width lies right of its end) and the
+    straight line from its end to the start of ``nxt`` crosses its ink away from the line's two
+    ends. A cursive letter that leaves towards the next one (a looped ``g`` that comes back up to
+    the baseline and past its stem, an ``o`` left from its top) does not, and is joined.
+
+    Parameters
+    ----------
+    prev, nxt : ndarray, shape (n, 2)
+        The letters before and after (laid out, centimetres).
+    margin : float
+        As :func:`ink_crossings`: ink this close to the line's ends is not counted.
+    """
+    prev = np.asarray(prev, dtype=np.float64)
+    left, right = prev[:, 0].min(), prev[:, 0].max()
+    if right - prev[-1, 0] <= 0.5 * (right - left):
+        return False
+    line = np.stack([prev[-1], np.asarray(nxt, dtype=np.float64)[0]])
+    return ink_crossings(line, [prev], margin) > 0
+
+
 def hand_connection(
     prev: np.ndarray,
     nxt: np.ndarray,

@@ -8,9 +8,11 @@ one kind:
 * ``"connection"`` — the pen-down stroke joining two letters of one word
   (:mod:`prg.pipeline.connect`); a pair of letters already within ``delta`` has no connection
   segment, so two letter segments can be adjacent;
-* ``"space"`` — the pen-up travel between the last letter of a word and the first of the next,
-  when ``text`` holds several words on one line (a straight path subdivided at ``delta``: the DMP
-  stays one continuous motion; the simulator lifts the pen and renderings draw no ink there);
+* ``"space"`` — a pen-up travel within the body: between the last letter of a word and the first
+  of the next, when ``text`` holds several words on one line, or between two letters of a word
+  where a writer lifts the pen (:func:`prg.pipeline.joins.lifts_pen`) (a straight path subdivided
+  at ``delta``: the DMP stays one continuous motion; the simulator lifts the pen and renderings
+  draw no ink there);
 * ``"lift"`` — after the cursive **body** (the letters, connections and spaces, which one DMP
   writes), the pen-up travel to a delayed stroke (a straight path, points strictly between its
   ends);
@@ -494,8 +496,8 @@ def assemble_word(
     connections : sequence of ConnectionResult or ndarray of shape (k, 2)
         One per consecutive letter pair: the points strictly between the two letters
         (:func:`prg.pipeline.connect.connect_sequence`). Where ``text`` has a space between the
-        two letters, the entry is the pen-up travel and becomes a ``"space"`` segment; otherwise
-        a ``"connection"`` segment. Empty entries add no segment.
+        two letters, or the entry is a pen-up travel (``ConnectionResult.pen_up``), it becomes a
+        ``"space"`` segment; otherwise a ``"connection"`` segment. Empty entries add no segment.
     text : str
     speed_cm_s : float
         Writing speed; ``duration_s`` = path length / speed.
@@ -534,7 +536,8 @@ def assemble_word(
             pts = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
             if pts.shape[0]:
                 pieces.append(pts)
-                kinds.append("space" if breaks[i] else "connection")
+                pen_up = breaks[i] or (isinstance(conn, ConnectionResult) and conn.pen_up)
+                kinds.append("space" if pen_up else "connection")
     for mark in marks:
         mark = np.asarray(mark, dtype=np.float64)
         if mark.ndim != 2 or mark.shape[1] != 2 or mark.shape[0] < 2:

@@ -172,11 +172,13 @@ def test_a_word_from_any_letters_is_finite_continuous_and_bounded(data, method):
     word, path = compose_word(letters, text, params)
     points = word.body  # the delayed strokes follow it: tests/test_marks.py
     assert np.all(np.isfinite(points)) and np.all(np.isfinite(path))
-    # the letters are written whole, in order, as laid out
+    # the letters are written whole, in order, as laid out; a crossed letter (its bar a delayed
+    # stroke) and, joined by hand, an o may end early: a prefix of it
     placed = layout_letters(list(letters), text)
     for (char, drawn), expected, c in zip(word.letters, placed, chars):
         assert char == c
-        np.testing.assert_array_equal(drawn, expected)
+        cut = params.marks.mark_of(c) == "bar" or (c == "o" and method == "hand")
+        np.testing.assert_array_equal(drawn, expected[: len(drawn)] if cut else expected)
     # the pen never jumps: outside a letter's own points, no step exceeds delta
     kinds = np.array(word.segment_kinds)[word.segment[: word.body_end]]
     own = (np.diff(word.segment[: word.body_end]) == 0) & (kinds[1:] == "letter")

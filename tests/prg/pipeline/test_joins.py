@@ -160,3 +160,58 @@ def test_only_the_hand_method_leaves_an_o_at_its_top():
     last = lambda word: word.points[word.segment == 2]  # noqa: E731
     assert len(first(hand)) < len(first(paper)) == 100
     assert len(last(hand)) == len(last(paper)) == 100  # the word's last o keeps its exit
+
+
+def _polyline(*corners, n=40):
+    """Points every so often along straight pieces through ``corners``."""
+    pieces = [
+        np.linspace(a, b, n, endpoint=False) for a, b in zip(corners[:-1], corners[1:])
+    ]
+    return np.concatenate([*pieces, np.array(corners[-1:], dtype=float)])
+
+
+# a print j: its stem down from the x-height, its foot curling left below the baseline
+PRINT_J = _polyline((0.0, 0.75), (0.0, -0.4), (-0.15, -0.6), (-0.35, -0.5))
+# a cursive j: the same stem, its tail looping back up past the stem to the baseline
+CURSIVE_J = _polyline((0.0, 0.75), (0.0, -0.4), (-0.2, -0.6), (-0.3, -0.4), (0.35, 0.0))
+NEXT_O = _arc((0.9, 0.37), (0.3, 0.37), 90, 450)  # an o to the right, started at its top
+
+
+def test_a_print_descender_is_left_by_lifting_the_pen():
+    from prg.pipeline.joins import lifts_pen
+
+    assert lifts_pen(PRINT_J, NEXT_O)  # the line to the o crosses the j's stem
+    assert not lifts_pen(CURSIVE_J, NEXT_O)  # it leaves past its stem, towards the o
+
+
+def test_only_a_letter_ending_left_of_its_middle_that_must_go_back_over_itself_lifts():
+    from prg.pipeline.joins import lifts_pen
+
+    o = _arc((0.0, 0.37), (0.3, 0.37), 90, 450)  # ends where it started, at its top middle
+    assert not lifts_pen(o, NEXT_O + [0.0, -0.45])  # the line leaves through its right side
+    slash = _polyline((0.5, 0.75), (0.0, 0.0))  # ends at its left, nothing between it and the o
+    assert not lifts_pen(slash, NEXT_O + [0.3, 0.0])
+    hook = _polyline((0.5, 0.75), (0.0, 0.0), (0.5, 0.3), (0.1, 0.3))  # ends left, inside itself
+    assert lifts_pen(hook, NEXT_O + [0.3, 0.0])
+
+
+def test_the_hand_method_lifts_the_pen_after_a_print_descender_and_only_it():
+    from prg.pipeline.connect import connect_sequence
+    from prg.pipeline.word import assemble_word
+
+    letters = [PRINT_J, NEXT_O]
+    for method in ("alg1", "straight"):  # the paper's joins never lift
+        (joined,) = connect_sequence(letters, method=method)
+        assert not joined.pen_up
+    (lifted,) = connect_sequence(letters, method="hand")
+    assert lifted.pen_up
+    word = assemble_word(letters, [lifted], "jo")
+    assert word.segment_kinds == ["letter", "space", "letter"]
+    travel = word.points[word.segment == 1]
+    assert not word.pen_down()[word.segment == 1].any()  # drawn without ink
+    # a straight travel, from the j's foot to the o's start
+    direction = (NEXT_O[0] - PRINT_J[-1]) / np.linalg.norm(NEXT_O[0] - PRINT_J[-1])
+    offsets = travel - PRINT_J[-1]
+    assert np.allclose(offsets[:, 0] * direction[1] - offsets[:, 1] * direction[0], 0, atol=1e-9)
+    (cursive,) = connect_sequence([CURSIVE_J, NEXT_O], method="hand")
+    assert not cursive.pen_up
