@@ -87,7 +87,6 @@ All lengths are in the units of the inputs (centimetres in the pipeline), angles
 from __future__ import annotations
 
 import dataclasses
-
 import itertools
 import math
 from dataclasses import dataclass

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -164,9 +165,7 @@ def test_only_the_hand_method_leaves_an_o_at_its_top():
 
 def _polyline(*corners, n=40):
     """Points every so often along straight pieces through ``corners``."""
-    pieces = [
-        np.linspace(a, b, n, endpoint=False) for a, b in zip(corners[:-1], corners[1:])
-    ]
+    pieces = [np.linspace(a, b, n, endpoint=False) for a, b in itertools.pairwise(corners)]
     return np.concatenate([*pieces, np.array(corners[-1:], dtype=float)])
 
 
@@ -188,11 +187,13 @@ def test_only_a_letter_ending_left_of_its_middle_that_must_go_back_over_itself_l
     from prg.pipeline.joins import lifts_pen
 
     o = _arc((0.0, 0.37), (0.3, 0.37), 90, 450)  # ends where it started, at its top middle
-    assert not lifts_pen(o, NEXT_O + [0.0, -0.45])  # the line leaves through its right side
+    assert not lifts_pen(
+        o, NEXT_O + np.array([0.0, -0.45])
+    )  # the line leaves through its right side
     slash = _polyline((0.5, 0.75), (0.0, 0.0))  # ends at its left, nothing between it and the o
-    assert not lifts_pen(slash, NEXT_O + [0.3, 0.0])
+    assert not lifts_pen(slash, NEXT_O + np.array([0.3, 0.0]))
     hook = _polyline((0.5, 0.75), (0.0, 0.0), (0.5, 0.3), (0.1, 0.3))  # ends left, inside itself
-    assert lifts_pen(hook, NEXT_O + [0.3, 0.0])
+    assert lifts_pen(hook, NEXT_O + np.array([0.3, 0.0]))
 
 
 def test_the_hand_method_lifts_the_pen_after_a_print_descender_and_only_it():
