@@ -28,17 +28,17 @@ def files_below(folder: Path) -> list[Path]:
     return sorted(p for p in folder.rglob("*") if p.is_file() and logs not in p.parents)
 
 
-@pytest.mark.parametrize(
-    "content, problem",
-    [
-        ({"state_dict": {}, "hyper_parameters": {}}, "its hyper_parameters have no model._target_"),
-        ({"state_dict": {}, "hyper_parameters": {"model": 3}}, "no model._target_"),
-        ({"state_dict": {}, "hyper_parameters": None}, "no hyper_parameters"),
-        ({"state_dict": [1], "hyper_parameters": {}}, "no state_dict of named tensors"),
-    ],
-    ids=["no-model", "model-not-a-dict", "hparams-none", "weights-not-a-dict"],
-)
-def test_train_resume_from_a_checkpoint_like_dict(tmp_path, small_dataset, content, problem):
+CHECKPOINT_LIKE = [
+    ({"state_dict": {}, "hyper_parameters": {}}, "its hyper_parameters have no model._target_"),
+    ({"state_dict": {}, "hyper_parameters": {"model": 3}}, "no model._target_"),
+    ({"state_dict": {}, "hyper_parameters": None}, "no hyper_parameters"),
+    ({"state_dict": [1], "hyper_parameters": {}}, "no state_dict of named tensors"),
+]
+
+
+def test_train_resume_from_a_checkpoint_like_dict(tmp_path, small_dataset):
+    """The real command on one checkpoint-like dict; the reader it calls on every kind below."""
+    content, problem = CHECKPOINT_LIKE[0]
     ckpt = tmp_path / "like.ckpt"
     torch.save(content, ckpt)
     result = run_cli(
@@ -53,6 +53,26 @@ def test_train_resume_from_a_checkpoint_like_dict(tmp_path, small_dataset, conte
     assert f"{problem}); accepted" in line
     assert "accepted: a model.ckpt, best.ckpt or last.ckpt written by prg-train" in line
     assert not (tmp_path / "checkpoints").exists()
+
+
+@pytest.mark.parametrize(
+    "content, problem",
+    CHECKPOINT_LIKE,
+    ids=["no-model", "model-not-a-dict", "hparams-none", "weights-not-a-dict"],
+)
+def test_every_checkpoint_like_dict_is_named_by_what_it_lacks(tmp_path, content, problem):
+    from prg.errors import UsageError
+    from prg.models.checkpoint import read_checkpoint
+
+    ckpt = tmp_path / "like.ckpt"
+    torch.save(content, ckpt)
+    with pytest.raises(UsageError) as refused:
+        read_checkpoint(ckpt)
+    line = str(refused.value)
+    assert "\n" not in line and f"checkpoint {ckpt} is not a prg training checkpoint (" in line
+    assert (
+        f"{problem}); accepted: a model.ckpt, best.ckpt or last.ckpt written by prg-train" in line
+    )
 
 
 def test_unknown_speech_language(tmp_path, untrained_muse_checkpoint):

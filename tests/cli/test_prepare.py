@@ -90,6 +90,7 @@ def test_prepare_synthetic_writes_dataset_figures_and_metrics(tmp_path):
         "val.npz",
         "test.npz",
         "manifest.json",
+        "provenance.json",
         "figures",
     }
     assert len(list((root / "figures").glob("*.png"))) == 3

@@ -102,7 +102,7 @@ def test_build_is_bit_identical_across_blas_kernels_threads_and_workers(tmp_path
     if kernels:  # the two environments really do different BLAS arithmetic
         assert a["blas"] != b["blas"]
     first, second = _files(tmp_path / "a"), _files(tmp_path / "b")
-    assert sorted(first) == ["manifest.json", "test.npz", "train.npz", "val.npz"]
+    assert sorted(first) == ["manifest.json", "provenance.json", "test.npz", "train.npz", "val.npz"]
     for name in first:
         assert first[name] == second[name], name
 

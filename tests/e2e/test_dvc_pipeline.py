@@ -4,6 +4,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
+import pytest
 import yaml
 
 from tests.conftest import BIN, REPO, run_cli
@@ -98,6 +99,7 @@ def test_dvc_repro_prepare_equals_prg_prepare_and_is_idempotent(tmp_path):
     assert "up to date" in _dvc(repo, "status", "prepare").stdout
 
 
+@pytest.mark.slow  # a training and an evaluation through dvc: about 2 min of both cores
 def test_dvc_plots_show_renders_the_training_curves_and_coherence_plots(tmp_path):
     """The pipeline's plots from real outputs: `dvc repro train@cvae` writes its history.csv,
     `prg-evaluate` (coherence of that model) its reports/plots/, and `dvc plots show` renders

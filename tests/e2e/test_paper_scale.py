@@ -56,6 +56,7 @@ def _run(cwd: Path, *args: str, timeout: int = 600) -> subprocess.CompletedProce
     )
 
 
+@pytest.mark.slow  # four trainings and an evaluation: 2.5-5 min of both cores (make test-all)
 def test_trains_four_families_concurrently_then_evaluates_into_its_own_folder(
     tmp_path, small_dataset
 ):
