@@ -1,6 +1,11 @@
 """The baselines' section (``make baselines``: families x seeds of the quick profile, every table
 as mean and 95 % CI over seeds with paired, Holm-corrected comparisons), from the snapshot of its
-``aggregate.json`` in ``benchmarks/results/baselines/`` (``--snapshot-baselines baselines``)."""
+``aggregate.json`` in ``benchmarks/results/baselines/`` (``--snapshot-baselines baselines``).
+
+The snapshot keeps the per-(seed, family) metrics too (``seeds/``, the sweep's own layout: a
+few kB each), so a later run that adds families or seeds can be aggregated with these without
+retraining them: copy ``seeds/`` into the sweep's folder, then ``python -m
+prg.commands.baselines aggregate``."""
 
 from __future__ import annotations
 
@@ -36,12 +41,37 @@ def baselines_markdown(baselines: Path = BASELINES) -> str:
     return head + "\n\n" + summary_markdown(agg, heading="####").rstrip("\n")
 
 
+#: What the snapshot keeps of each (seed, family), relative to the sweep's folder.
+PER_SEED = (
+    "seed{seed}/{family}/metrics.json",  # training: fit times, epochs
+    "seed{seed}/reports/{family}/metrics.json",  # evaluation: every table's values
+    "seed{seed}/reports/{family}/timing.json",  # evaluation: CPU and wall time
+)
+
+
 def snapshot_baselines(source: Path, baselines: Path = BASELINES) -> None:
     """Copy ``<source>/report/aggregate.json`` of a finished ``make baselines`` into
-    ``baselines``."""
+    ``baselines``, and the per-(seed, family) metrics it was aggregated from into
+    ``baselines/seeds/`` (replacing an older snapshot's)."""
+    import shutil
+
     path = source / "report" / AGGREGATE
     agg = read_json(path)
     if not agg.get("summaries") or not agg.get("seeds"):
         raise SummaryError(f"{path}: not an aggregate of a baselines sweep")
+    families = [f for f in agg["families"] if f != "real"]
+    files = [
+        pattern.format(seed=seed, family=family)
+        for seed in agg["seeds"]
+        for family in families
+        for pattern in PER_SEED
+    ]
+    missing = [f for f in files if not (source / f).is_file()]
+    if missing:
+        raise SummaryError(f"{source / missing[0]} does not exist: the aggregate's own inputs")
     baselines.mkdir(parents=True, exist_ok=True)
+    shutil.rmtree(baselines / "seeds", ignore_errors=True)
+    for name in files:
+        (baselines / "seeds" / name).parent.mkdir(parents=True, exist_ok=True)
+        write_bytes(baselines / "seeds" / name, (source / name).read_bytes())
     write_bytes(baselines / AGGREGATE, path.read_bytes())

@@ -329,24 +329,33 @@ def test_images_moved_off_centre_show_each_shift_for_the_models_that_read_images
 
 def test_the_baselines_snapshot_shows_its_tables_over_seeds_and_its_wall_time(tmp_path):
     from prg.evaluation import seeds
+    from tests.prg.evaluation.test_seeds import _sweep
 
     out = tmp_path / "snapshot"
     assert "No baselines snapshot yet" in summarize.baselines_markdown(out)
-    values = {
-        "cvae": {"coherence_T_given_S": {0: 0.80, 1: 0.82, 2: 0.79}},
-        "avae_ti": {"coherence_T_given_I": {0: 0.90, 1: 0.91, 2: 0.93}},
+    sweep = _sweep(tmp_path / "baselines", ["cvae", "avae_ti"], [0, 1, 2])
+    agg = {
+        **seeds.aggregate(seeds.collect(sweep)),
+        "wall_min": 12.5,
+        "machine": "a CPU (2 cores)",
     }
-    agg = {**seeds.aggregate(values), "wall_min": 12.5, "machine": "a CPU (2 cores)"}
-    sweep = tmp_path / "baselines"
     (sweep / "report").mkdir(parents=True)
     (sweep / "report" / "aggregate.json").write_text(json.dumps(seeds.json_ready(agg)))
     summarize.snapshot_baselines(sweep, out)
     text = summarize.baselines_markdown(out)
     assert "`cvae`, `avae_ti` x seeds 0-2 (quick profile), 12.5 min wall on a CPU (2 cores)" in text
-    assert (
-        "| `coherence_T_given_S` | 0.803 [" in text
-        and "| `coherence_T_given_I` |  | 0.913 [" in text
-    )
+    # cvae's coherence over seeds 0-2 (tests/prg/evaluation/test_seeds.py: 0.5 + 0.01 s)
+    assert "| `coherence_T_given_S` |" in text and "0.510 [" in text
+    # the per-seed metrics came along: aggregated again, they give the same tables
+    copied = sorted(p.relative_to(out / "seeds") for p in (out / "seeds").rglob("*.json"))
+    assert len(copied) == 3 * 2 * 3
+    again = seeds.json_ready(seeds.aggregate(seeds.collect(out / "seeds")))
+    assert again["tables"] == json.loads((out / "aggregate.json").read_text())["tables"]
+    # an aggregate without its inputs, or not an aggregate, is refused, the snapshot kept
+    (sweep / "seed1" / "reports" / "cvae" / "timing.json").unlink()
+    with pytest.raises(summarize.SummaryError, match=r"seed1/reports/cvae/timing.json does not"):
+        summarize.snapshot_baselines(sweep, out)
+    assert len(list((out / "seeds").rglob("*.json"))) == 18
     (sweep / "report" / "aggregate.json").write_text("{}")
     with pytest.raises(summarize.SummaryError, match="not an aggregate"):
         summarize.snapshot_baselines(sweep, out)
