@@ -89,7 +89,7 @@ baselines: setup ## Families x 5 seeds (quick), evaluated; mean, 95 % CI, paired
 	threads=$$(( $$(nproc) / $(BASELINE_JOBS) )); export OMP_NUM_THREADS=$${OMP_NUM_THREADS:-$$(( threads > 0 ? threads : 1 ))}; \
 	parent=$$($(BIN)/python -m prg.commands.baselines parent $$out $(BASELINE_ARGS)); \
 	PRG_PARENT_RUN_ID=$$parent $(BIN)/prg-train -m \
-		model=$(subst $(_space),$(_comma),$(strip $(BASELINE_FAMILIES))) seed=$(BASELINE_SEEDS) \
+		seed=$(BASELINE_SEEDS) model=$(subst $(_space),$(_comma),$(strip $(BASELINE_FAMILIES))) \
 		experiment=quick 'export_dir='$$out'/seed$${seed}/$${model.name}' \
 		'checkpoint_dir='$$out'/checkpoints/$${model.name}-seed$${seed}' \
 		trainer.enable_progress_bar=false $(if $(filter-out 1,$(BASELINE_JOBS)),hydra/launcher=joblib \
