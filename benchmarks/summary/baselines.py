@@ -51,8 +51,8 @@ PER_SEED = (
 
 def snapshot_baselines(source: Path, baselines: Path = BASELINES) -> None:
     """Copy ``<source>/report/aggregate.json`` of a finished ``make baselines`` into
-    ``baselines``, and the per-(seed, family) metrics it was aggregated from into
-    ``baselines/seeds/`` (replacing an older snapshot's)."""
+    ``baselines``, and the per-(seed, family) metrics it was aggregated from (every evaluated
+    pair) into ``baselines/seeds/`` (replacing an older snapshot's)."""
     import shutil
 
     path = source / "report" / AGGREGATE
@@ -60,13 +60,20 @@ def snapshot_baselines(source: Path, baselines: Path = BASELINES) -> None:
     if not agg.get("summaries") or not agg.get("seeds"):
         raise SummaryError(f"{path}: not an aggregate of a baselines sweep")
     families = [f for f in agg["families"] if f != "real"]
-    files = [
-        pattern.format(seed=seed, family=family)
+    # the (seed, family) pairs evaluated: a family may have fewer seeds than the sweep
+    pairs = [
+        (seed, family)
         for seed in agg["seeds"]
         for family in families
-        for pattern in PER_SEED
+        if (source / PER_SEED[1].format(seed=seed, family=family)).is_file()
     ]
+    files = [p.format(seed=seed, family=family) for seed, family in pairs for p in PER_SEED]
     missing = [f for f in files if not (source / f).is_file()]
+    missing += [
+        PER_SEED[1].format(seed=agg["seeds"][0], family=f)
+        for f in families
+        if f not in {family for _, family in pairs}
+    ]
     if missing:
         raise SummaryError(f"{source / missing[0]} does not exist: the aggregate's own inputs")
     baselines.mkdir(parents=True, exist_ok=True)

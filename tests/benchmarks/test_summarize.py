@@ -352,10 +352,14 @@ def test_the_baselines_snapshot_shows_its_tables_over_seeds_and_its_wall_time(tm
     again = seeds.json_ready(seeds.aggregate(seeds.collect(out / "seeds")))
     assert again["tables"] == json.loads((out / "aggregate.json").read_text())["tables"]
     # an aggregate without its inputs, or not an aggregate, is refused, the snapshot kept
+    shutil.rmtree(sweep / "seed2" / "reports" / "avae_ti")  # a pair not evaluated: left out
+    summarize.snapshot_baselines(sweep, out)
+    assert len(list((out / "seeds").rglob("*.json"))) == 15
+    assert not (out / "seeds" / "seed2" / "reports" / "avae_ti").exists()
     (sweep / "seed1" / "reports" / "cvae" / "timing.json").unlink()
     with pytest.raises(summarize.SummaryError, match=r"seed1/reports/cvae/timing.json does not"):
         summarize.snapshot_baselines(sweep, out)
-    assert len(list((out / "seeds").rglob("*.json"))) == 18
+    assert len(list((out / "seeds").rglob("*.json"))) == 15
     (sweep / "report" / "aggregate.json").write_text("{}")
     with pytest.raises(summarize.SummaryError, match="not an aggregate"):
         summarize.snapshot_baselines(sweep, out)
