@@ -202,3 +202,27 @@ def test_a_failing_figure_leaves_the_previous_one(tmp_path, monkeypatch):
         seeds.comparison_figure(agg, path)
     assert path.read_bytes() == b"old"
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+
+def test_the_summary_and_figure_show_both_classifiers_folded_cross_modal_cells(tmp_path):
+    metrics = [
+        "coherence_folded_T_given_S",
+        "coherence_folded_second_T_given_S",
+        "coherence_folded_second_T_given_T",  # a reconstruction: not cross-modal
+        "coherence_folded_sampled_T_given_S",  # sampled: not the posterior mean
+    ]
+    assert seeds.cross_modal(metrics, folded=True) == metrics[:2]
+    assert seeds.cross_modal(metrics) == []
+    assert seeds._cell_label(metrics[1]) == "T|S 2nd" and seeds._cell_label(metrics[0]) == "T|S"
+    values = {
+        "cvae": {
+            "coherence_T_given_S": {0: 0.84, 1: 0.83, 2: 0.85},
+            "coherence_folded_T_given_S": {0: 0.87, 1: 0.86, 2: 0.88},
+            "coherence_folded_second_T_given_S": {0: 0.52, 1: 0.50, 2: 0.54},
+        }
+    }
+    agg = seeds.aggregate(values)
+    text = seeds.summary_markdown(agg)
+    assert "| `coherence_folded_second_T_given_S` | 0.520 [" in text  # (0.52 + 0.50 + 0.54) / 3
+    assert "| `coherence_folded_T_given_S` | 0.870 [" in text
+    assert seeds.comparison_figure(agg, tmp_path / "c.png").read_bytes()[:4] == b"\x89PNG"
