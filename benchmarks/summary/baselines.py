@@ -9,9 +9,10 @@ prg.commands.baselines aggregate``."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
-from prg.evaluation.seeds import seeds_text, summary_markdown
+from prg.evaluation.seeds import seeds_text, summary_markdown, summary_only
 from prg.files import write_bytes
 
 from .common import BASELINES, SummaryError, read_json
@@ -33,10 +34,17 @@ def baselines_markdown(baselines: Path = BASELINES) -> str:
         if agg.get("wall_min") is not None
         else "wall time not recorded"
     )
+    families = [f for f in agg["families"] if f != "real"]
+    counts = {
+        len(max((row["seeds"] for row in agg["summaries"][f].values()), key=len, default=[]))
+        for f in families
+    }
+    uneven = " (not every family on each: each table's Seeds line says which)"
     head = (
-        f"`make baselines`: {', '.join(f'`{f}`' for f in agg['families'] if f != 'real')} x "
-        f"seeds {seeds_text(agg['seeds'])} (quick profile), {wall}. Every table of the run, "
-        "each pairwise comparison and the figure are in `baselines/report/`."
+        f"`make baselines`: {', '.join(f'`{f}`' for f in families)} x "
+        f"seeds {seeds_text(agg['seeds'])}{uneven if len(counts) > 1 else ''} (quick profile), "
+        f"{wall}. Every table of the run, each pairwise comparison and the figure are in "
+        "`baselines/report/`."
     )
     return head + "\n\n" + summary_markdown(agg, heading="####").rstrip("\n")
 
@@ -51,8 +59,9 @@ PER_SEED = (
 
 def snapshot_baselines(source: Path, baselines: Path = BASELINES) -> None:
     """Copy ``<source>/report/aggregate.json`` of a finished ``make baselines`` into
-    ``baselines``, and the per-(seed, family) metrics it was aggregated from (every evaluated
-    pair) into ``baselines/seeds/`` (replacing an older snapshot's)."""
+    ``baselines``, cut down to what the docs show (:func:`prg.evaluation.seeds.summary_only`),
+    and the per-(seed, family) metrics it was aggregated from (every evaluated pair) into
+    ``baselines/seeds/`` (replacing an older snapshot's)."""
     import shutil
 
     path = source / "report" / AGGREGATE
@@ -81,4 +90,7 @@ def snapshot_baselines(source: Path, baselines: Path = BASELINES) -> None:
     for name in files:
         (baselines / "seeds" / name).parent.mkdir(parents=True, exist_ok=True)
         write_bytes(baselines / "seeds" / name, (source / name).read_bytes())
-    write_bytes(baselines / AGGREGATE, path.read_bytes())
+    # what the docs show (the whole aggregate is regenerated from seeds/ when wanted): the
+    # whole one, every metric compared between 7 families, is over 1 MB
+    slim = json.dumps(summary_only(agg), separators=(",", ":")) + "\n"
+    write_bytes(baselines / AGGREGATE, slim.encode())

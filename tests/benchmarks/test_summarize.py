@@ -346,11 +346,16 @@ def test_the_baselines_snapshot_shows_its_tables_over_seeds_and_its_wall_time(tm
     assert "`cvae`, `avae_ti` x seeds 0-2 (quick profile), 12.5 min wall on a CPU (2 cores)" in text
     # cvae's coherence over seeds 0-2 (tests/prg/evaluation/test_seeds.py: 0.5 + 0.01 s)
     assert "| `coherence_T_given_S` |" in text and "0.510 [" in text
-    # the per-seed metrics came along: aggregated again, they give the same tables
+    # the docs' block is the whole aggregate's summary, from the cut-down copy
+    whole = seeds.summary_markdown(json.loads(json.dumps(seeds.json_ready(agg))))
+    assert text.endswith(whole.rstrip("\n"))
+    # the per-seed metrics came along: aggregated again, they give the same summary
     copied = sorted(p.relative_to(out / "seeds") for p in (out / "seeds").rglob("*.json"))
     assert len(copied) == 3 * 2 * 3
     again = seeds.json_ready(seeds.aggregate(seeds.collect(out / "seeds")))
-    assert again["tables"] == json.loads((out / "aggregate.json").read_text())["tables"]
+    assert seeds.summary_markdown(again) == seeds.summary_markdown(
+        json.loads((out / "aggregate.json").read_text())
+    )
     # an aggregate without its inputs, or not an aggregate, is refused, the snapshot kept
     shutil.rmtree(sweep / "seed2" / "reports" / "avae_ti")  # a pair not evaluated: left out
     summarize.snapshot_baselines(sweep, out)
@@ -363,3 +368,18 @@ def test_the_baselines_snapshot_shows_its_tables_over_seeds_and_its_wall_time(tm
     (sweep / "report" / "aggregate.json").write_text("{}")
     with pytest.raises(summarize.SummaryError, match="not an aggregate"):
         summarize.snapshot_baselines(sweep, out)
+
+
+def test_a_snapshot_whose_families_have_different_seeds_says_so(tmp_path):
+    from prg.evaluation import seeds
+
+    values = {
+        "cvae": {"coherence_T_given_S": {0: 0.80, 1: 0.82, 2: 0.79}},
+        "mvae": {"coherence_T_given_S": {0: 0.40}},  # a run stopped after seed 0 of mvae
+    }
+    agg = seeds.json_ready(seeds.aggregate(values))
+    (tmp_path / "aggregate.json").write_text(json.dumps(agg))
+    text = summarize.baselines_markdown(tmp_path)
+    assert "x seeds 0-2 (not every family on each: each table's Seeds line says which)" in text
+    assert "Seeds: PRG_CVAE(T,S) 3 (0-2); MVAE(T,S,I) 1 (0)." in text
+    assert "1 untested (fewer than two seeds in common, or the same difference" in text

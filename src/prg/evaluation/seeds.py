@@ -441,7 +441,12 @@ def significance_text(agg: Mapping[str, Any], metrics: Sequence[str], fmt: str) 
         f"Holm-adjusted over the pairs of each metric, significant where p_Holm < {alpha:g}): "
         f"{sum(1 for c in agg['comparisons'] if c['metric'] in wanted and c['significant'])} of "
         f"{tested} significant"
-        + (f"; {untested} untested (the difference is the same on every seed)" if untested else "")
+        + (
+            f"; {untested} untested (fewer than two seeds in common, or the same difference on "
+            "every seed)"
+            if untested
+            else ""
+        )
         + "; every comparison in comparisons.csv."
     )
     return "\n".join([head, "", *lines]) if lines else head
@@ -517,24 +522,41 @@ def cross_modal(metrics: Iterable[str], folded: bool = False) -> list[str]:
     return out
 
 
-def summary_markdown(agg: Mapping[str, Any], heading: str = "####") -> str:
-    """The short version: cross-modal coherence, roughness, the Table I conditionals, times."""
-    metrics = {m for t in agg["tables"].values() for m in t}
-    parts = [
-        table_markdown(agg, "coherence", cross_modal(sorted(metrics)), heading),
-        # the same cells by both classifiers, shape twins folded: where they part, the letters
-        # are read differently by the points' order and by the shape (docs/evaluation.md)
-        table_markdown(agg, "coherence", cross_modal(sorted(metrics), folded=True), heading),
-        table_markdown(
-            agg,
-            "roughness",
-            [m for m in agg["tables"]["roughness"] if "_imputed" not in m],
-            heading,
-        ),
-        table_markdown(agg, "table1", [m for m in SUMMARY_TABLE1 if m in metrics], heading),
-        table_markdown(agg, "timing", heading=heading),
+def summary_tables(agg: Mapping[str, Any]) -> list[tuple[str, list[str]]]:
+    """The short version's tables, (table, metrics) each: cross-modal coherence (exact, then
+    folded by both classifiers: where they part, the letters are read differently by the points'
+    order and by the shape, docs/evaluation.md), roughness, the Table I conditionals, times."""
+    metrics = sorted({m for t in agg["tables"].values() for m in t})
+    return [
+        ("coherence", cross_modal(metrics)),
+        ("coherence", cross_modal(metrics, folded=True)),
+        ("roughness", [m for m in agg["tables"]["roughness"] if "_imputed" not in m]),
+        ("table1", [m for m in SUMMARY_TABLE1 if m in metrics]),
+        ("timing", list(agg["tables"]["timing"])),
     ]
-    return "\n".join(parts)
+
+
+def summary_markdown(agg: Mapping[str, Any], heading: str = "####") -> str:
+    """The short version (:func:`summary_tables`) as markdown."""
+    return "\n".join(table_markdown(agg, t, m, heading) for t, m in summary_tables(agg))
+
+
+def summary_only(agg: Mapping[str, Any]) -> dict[str, Any]:
+    """``agg`` cut down to what :func:`summary_markdown` shows (the summaries, tables and
+    comparisons of its metrics): the docs' snapshot, a tenth of the whole aggregate's size."""
+    keep: dict[str, list[str]] = {}
+    for table, metrics in summary_tables(agg):
+        keep.setdefault(table, []).extend(m for m in metrics if m not in keep[table])
+    shown = {m for metrics in keep.values() for m in metrics}
+    return {
+        **agg,
+        "tables": {t: [m for m in agg["tables"][t] if m in shown] for t in agg["tables"]},
+        "summaries": {
+            f: {m: row for m, row in rows.items() if m in shown}
+            for f, rows in agg["summaries"].items()
+        },
+        "comparisons": [c for c in agg["comparisons"] if c["metric"] in shown],
+    }
 
 
 # ---- the figure ------------------------------------------------------------------------------

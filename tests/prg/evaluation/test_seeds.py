@@ -226,3 +226,14 @@ def test_the_summary_and_figure_show_both_classifiers_folded_cross_modal_cells(t
     assert "| `coherence_folded_second_T_given_S` | 0.520 [" in text  # (0.52 + 0.50 + 0.54) / 3
     assert "| `coherence_folded_T_given_S` | 0.870 [" in text
     assert seeds.comparison_figure(agg, tmp_path / "c.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_the_summary_only_aggregate_shows_the_same_summary_and_drops_the_rest(tmp_path):
+    root = _sweep(tmp_path / "b", ["cvae", "avae_ts"], [0, 1, 2])
+    agg = seeds.json_ready(seeds.aggregate(seeds.collect(root)))
+    slim = seeds.summary_only(agg)
+    assert seeds.summary_markdown(slim) == seeds.summary_markdown(agg)
+    kept = {m for rows in slim["summaries"].values() for m in rows}
+    assert "coherence_T_given_S" in kept and "real/likeness_val_writers_legible" not in kept
+    assert {c["metric"] for c in slim["comparisons"]} <= kept
+    assert len(json.dumps(slim)) < len(json.dumps(agg))
