@@ -46,7 +46,7 @@ def baselines_markdown(baselines: Path = BASELINES) -> str:
         f"{wall}. Every table of the run, each pairwise comparison and the figure are in "
         "`baselines/report/`."
     )
-    return head + "\n\n" + summary_markdown(agg, heading="####").rstrip("\n")
+    return head + "\n\n" + summary_markdown(agg, heading="###").rstrip("\n")
 
 
 #: What the snapshot keeps of each (seed, family), relative to the sweep's folder.

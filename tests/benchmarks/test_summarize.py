@@ -347,7 +347,7 @@ def test_the_baselines_snapshot_shows_its_tables_over_seeds_and_its_wall_time(tm
     # cvae's coherence over seeds 0-2 (tests/prg/evaluation/test_seeds.py: 0.5 + 0.01 s)
     assert "| `coherence_T_given_S` |" in text and "0.510 [" in text
     # the docs' block is the whole aggregate's summary, from the cut-down copy
-    whole = seeds.summary_markdown(json.loads(json.dumps(seeds.json_ready(agg))))
+    whole = seeds.summary_markdown(json.loads(json.dumps(seeds.json_ready(agg))), heading="###")
     assert text.endswith(whole.rstrip("\n"))
     # the per-seed metrics came along: aggregated again, they give the same summary
     copied = sorted(p.relative_to(out / "seeds") for p in (out / "seeds").rglob("*.json"))
