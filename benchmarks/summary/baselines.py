@@ -10,6 +10,7 @@ prg.commands.baselines aggregate``."""
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 from prg.evaluation.seeds import seeds_text, summary_markdown, summary_only
@@ -62,8 +63,6 @@ def snapshot_baselines(source: Path, baselines: Path = BASELINES) -> None:
     ``baselines``, cut down to what the docs show (:func:`prg.evaluation.seeds.summary_only`),
     and the per-(seed, family) metrics it was aggregated from (every evaluated pair) into
     ``baselines/seeds/`` (replacing an older snapshot's)."""
-    import shutil
-
     path = source / "report" / AGGREGATE
     agg = read_json(path)
     if not agg.get("summaries") or not agg.get("seeds"):

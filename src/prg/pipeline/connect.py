@@ -405,17 +405,15 @@ def connect_sequence(
             f"breaks must have one entry per letter pair ({n_pairs}), got {len(breaks)}"
         )
     out = []
+    if method == "hand":
+        from prg.pipeline.joins import hand_connection, lifts_pen
     for a, b, pen_up in zip(letters[:-1], letters[1:], breaks):
-        if method == "hand" and not pen_up:
-            from prg.pipeline.joins import hand_connection, lifts_pen
-
-            pen_up = lifts_pen(a, b)
-            if not pen_up:
-                out.append(hand_connection(a, b, letters, params))
-        elif method == "alg1" and not pen_up:
-            out.append(connect_letters(a, b, **params.as_kwargs()))
-        elif method == "straight" and not pen_up:
-            out.append(straight_connection(a, b, params.delta))
-        if pen_up:
+        if pen_up or (method == "hand" and lifts_pen(a, b)):
             out.append(dataclasses.replace(straight_connection(a, b, params.delta), pen_up=True))
+        elif method == "hand":
+            out.append(hand_connection(a, b, letters, params))
+        elif method == "alg1":
+            out.append(connect_letters(a, b, **params.as_kwargs()))
+        else:
+            out.append(straight_connection(a, b, params.delta))
     return out
