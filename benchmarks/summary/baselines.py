@@ -13,7 +13,7 @@ import json
 import shutil
 from pathlib import Path
 
-from prg.evaluation.seeds import seeds_text, summary_markdown, summary_only
+from prg.evaluation.seed_report import seeds_text, summary_markdown, summary_only
 from prg.files import write_bytes
 
 from .common import BASELINES, SummaryError, read_json
@@ -60,7 +60,7 @@ PER_SEED = (
 
 def snapshot_baselines(source: Path, baselines: Path = BASELINES) -> None:
     """Copy ``<source>/report/aggregate.json`` of a finished ``make baselines`` into
-    ``baselines``, cut down to what the docs show (:func:`prg.evaluation.seeds.summary_only`),
+    ``baselines``, cut down to what the docs show (:func:`prg.evaluation.seed_report.summary_only`),
     and the per-(seed, family) metrics it was aggregated from (every evaluated pair) into
     ``baselines/seeds/`` (replacing an older snapshot's)."""
     path = source / "report" / AGGREGATE

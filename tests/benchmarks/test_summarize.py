@@ -328,12 +328,12 @@ def test_images_moved_off_centre_show_each_shift_for_the_models_that_read_images
 
 
 def test_the_baselines_snapshot_shows_its_tables_over_seeds_and_its_wall_time(tmp_path):
-    from prg.evaluation import seeds
-    from tests.prg.evaluation.test_seeds import _sweep
+    from prg.evaluation import seed_report, seeds
+    from tests.helpers.seeds import seed_sweep
 
     out = tmp_path / "snapshot"
     assert "No baselines snapshot yet" in summarize.baselines_markdown(out)
-    sweep = _sweep(tmp_path / "baselines", ["cvae", "avae_ti"], [0, 1, 2])
+    sweep = seed_sweep(tmp_path / "baselines", ["cvae", "avae_ti"], [0, 1, 2])
     agg = {
         **seeds.aggregate(seeds.collect(sweep)),
         "wall_min": 12.5,
@@ -344,16 +344,18 @@ def test_the_baselines_snapshot_shows_its_tables_over_seeds_and_its_wall_time(tm
     summarize.snapshot_baselines(sweep, out)
     text = summarize.baselines_markdown(out)
     assert "`cvae`, `avae_ti` x seeds 0-2 (quick profile), 12.5 min wall on a CPU (2 cores)" in text
-    # cvae's coherence over seeds 0-2 (tests/prg/evaluation/test_seeds.py: 0.5 + 0.01 s)
+    # cvae's coherence over seeds 0-2 (tests/helpers/seeds.py: 0.5 + 0.01 s)
     assert "| `coherence_T_given_S` |" in text and "0.510 [" in text
     # the docs' block is the whole aggregate's summary, from the cut-down copy
-    whole = seeds.summary_markdown(json.loads(json.dumps(seeds.json_ready(agg))), heading="###")
+    whole = seed_report.summary_markdown(
+        json.loads(json.dumps(seeds.json_ready(agg))), heading="###"
+    )
     assert text.endswith(whole.rstrip("\n"))
     # the per-seed metrics came along: aggregated again, they give the same summary
     copied = sorted(p.relative_to(out / "seeds") for p in (out / "seeds").rglob("*.json"))
     assert len(copied) == 3 * 2 * 3
     again = seeds.json_ready(seeds.aggregate(seeds.collect(out / "seeds")))
-    assert seeds.summary_markdown(again) == seeds.summary_markdown(
+    assert seed_report.summary_markdown(again) == seed_report.summary_markdown(
         json.loads((out / "aggregate.json").read_text())
     )
     # an aggregate without its inputs, or not an aggregate, is refused, the snapshot kept

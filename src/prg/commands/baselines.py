@@ -297,6 +297,7 @@ def aggregate(
     log: bool = True,
 ) -> dict:
     """Write ``folder/report/`` from the sweep's metrics and log it into the parent run."""
+    from prg.evaluation import seed_report
     from prg.evaluation import seeds as over_seeds
 
     values = over_seeds.collect(folder, families, seeds)
@@ -308,9 +309,9 @@ def aggregate(
         wall = f"`make baselines` took {agg['wall_min']:.1f} min wall on {agg['machine']}."
     report = folder / "report"
     with staged_outputs(report) as staging:
-        for name, text in over_seeds.report_texts(agg, wall).items():
+        for name, text in seed_report.report_texts(agg, wall).items():
             write_text(staging / name, text, atomic=False)
-        over_seeds.comparison_figure(agg, staging / "comparison.png")
+        seed_report.comparison_figure(agg, staging / "comparison.png")
     if log:
         run_id = open_parent(folder, overrides)
         log_to_parent(run_id, over_seeds.json_ready(agg), report, overrides)

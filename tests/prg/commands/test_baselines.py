@@ -17,7 +17,7 @@ from prg.evaluation import seeds
 from prg.files import write_json
 from prg.tracking import mlflow_client, sqlite_uri
 from tests.conftest import REPO
-from tests.prg.evaluation.test_seeds import _sweep
+from tests.helpers.seeds import seed_sweep
 
 
 def test_names_and_seeds_take_commas_or_spaces():
@@ -51,7 +51,7 @@ def test_evaluation_overrides_take_the_demo_budget_and_give_way_to_the_callers(t
 
 
 def test_an_evaluation_newer_than_its_model_is_up_to_date(tmp_path):
-    root = _sweep(tmp_path, ["cvae"], [0])
+    root = seed_sweep(tmp_path, ["cvae"], [0])
     model = root / "seed0" / "cvae" / "model.ckpt"
     model.write_bytes(b"x")
     done = seeds.evaluation_dir(root, 0, "cvae")
@@ -161,7 +161,7 @@ def test_a_failed_evaluation_lets_the_running_one_finish_and_starts_no_more(tmp_
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, argv, expected):
-    _sweep(tmp_path / "b", ["cvae"], [0])
+    seed_sweep(tmp_path / "b", ["cvae"], [0])
     assert baselines.main([a.format(b=tmp_path / "b") for a in argv]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and expected in err[0] and err[0].startswith(baselines.PROG)
@@ -170,7 +170,7 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, argv, expected):
 def test_the_parent_run_holds_the_aggregate_read_back_from_the_store(tmp_path, monkeypatch):
     monkeypatch.delenv("MLFLOW_TRACKING_URI", raising=False)
     monkeypatch.delenv("PRG_PARENT_RUN_ID", raising=False)
-    root = _sweep(tmp_path / "b")
+    root = seed_sweep(tmp_path / "b")
     overrides = [f"paths.root_dir={tmp_path}"]
     parent = baselines.open_parent(root, overrides)
     assert baselines.open_parent(root, overrides) == parent  # a rerun reuses it

@@ -1,20 +1,18 @@
 """Tests of ``prg.evaluation.seeds``: the interval and the paired test against scipy, Holm against
-a case worked by hand, blanks for missing cells, reading a sweep's folders, the reports and the
-figure written whole."""
+a case worked by hand, blanks for missing cells, reading a sweep's folders."""
 
 from __future__ import annotations
 
-import json
 import math
-import os
 
 import numpy as np
 import pytest
 from scipy import stats
 
 from prg.errors import UsageError
-from prg.evaluation import seeds
+from prg.evaluation import seed_report, seeds
 from prg.files import write_json
+from tests.helpers.seeds import seed_sweep
 
 
 @pytest.mark.parametrize(
@@ -102,21 +100,13 @@ def test_aggregate_compares_pairs_within_a_metric_and_leaves_absent_cells_blank(
         for c in agg["comparisons"]
         if c["metric"] == "coherence_S_given_S"
     )
-    text = seeds.table_markdown(agg, "coherence")
+    text = seed_report.table_markdown(agg, "coherence")
     row = next(line for line in text.splitlines() if line.startswith("| `coherence_T_given_S`"))
     cells = [c.strip() for c in row.strip("|").split("|")]
     assert cells[3] == ""  # avae_ti: blank, not 0
     assert cells[1].startswith("0.904 [")
     assert "PRG_CVAE(T,S) > PRG_AVAE(T,S)" in text
     assert "Seeds: PRG_CVAE(T,S) 5 (0-4)" in text
-
-
-def test_cell_text_blank_mean_alone_and_interval():
-    assert seeds.cell_text(None, ".3f") == ""
-    assert seeds.cell_text({"mean": 0.5, "ci_low": None, "ci_high": None}, ".3f") == "0.500"
-    assert seeds.cell_text({"mean": 0.5, "ci_low": 0.4, "ci_high": 0.6}, ".2f") == (
-        "0.50 [0.40, 0.60]"
-    )
 
 
 def test_tables_sort_metrics_where_the_demo_reports_them():
@@ -130,29 +120,8 @@ def test_tables_sort_metrics_where_the_demo_reports_them():
     assert seeds.table_of("style_k1_ratio") == []
 
 
-def _sweep(root, families=("cvae", "avae_ts"), seed_ids=(0, 1, 2)):
-    for s in seed_ids:
-        for i, f in enumerate(families):
-            write_json(
-                root / f"seed{s}" / f / "metrics.json",
-                {"family": f, "fit_cpu_s": 120.0 + s, "fit_wall_s": 60.0, "epochs": 1},
-            )
-            where = seeds.evaluation_dir(root, s, f)
-            write_json(
-                where / "metrics.json",
-                {
-                    f"{f}/coherence_T_given_S": 0.5 + 0.1 * i + 0.01 * s * (i + 1),
-                    f"{f}/roughness_ratio_T_given_S": 1.2 + 0.1 * s,
-                    "real/likeness_val_writers_legible": 0.9,
-                    "classifier/traj/test_accuracy": 0.92,
-                },
-            )
-            write_json(where / "timing.json", {"cpu_s": 30.0, "wall_s": 20.0})
-    return root
-
-
 def test_collect_reads_a_sweep_and_names_what_is_missing(tmp_path):
-    root = _sweep(tmp_path / "baselines")
+    root = seed_sweep(tmp_path / "baselines")
     # an evaluation under way: its hidden staging folder is not a family
     write_json(root / "seed0" / "reports" / ".muse.tmp-99" / "metrics.json", {"muse/x": 1.0})
     values = seeds.collect(root)
@@ -165,75 +134,3 @@ def test_collect_reads_a_sweep_and_names_what_is_missing(tmp_path):
         seeds.collect(root, ["cvae"], [0, 3])
     with pytest.raises(UsageError, match="no evaluated seed"):
         seeds.collect(tmp_path / "empty")
-
-
-def test_reports_and_figure_are_written_whole(tmp_path, monkeypatch):
-    agg = seeds.aggregate(seeds.collect(_sweep(tmp_path / "b")))
-    texts = seeds.report_texts(agg, "took 1 min")
-    assert {"coherence.md", "table1.csv", "comparisons.csv", "index.md", "aggregate.json"} <= set(
-        texts
-    )
-    loaded = json.loads(texts["aggregate.json"])
-    assert loaded["summaries"]["cvae"]["coherence_T_given_S"]["n"] == 3
-    assert "real letters" in texts["likeness.md"]
-    assert "coherence_T_given_S,cvae,avae_ts,3," in texts["comparisons.csv"]
-    # the figure goes to a temporary name first, then is renamed over the final one
-    renames = []
-    real_replace = os.replace
-    monkeypatch.setattr(os, "replace", lambda a, b: (renames.append((a, b)), real_replace(a, b)))
-    path = seeds.comparison_figure(agg, tmp_path / "comparison.png")
-    assert path.read_bytes()[:4] == b"\x89PNG"
-    ((tmp, final),) = renames
-    assert final == path and tmp.name.startswith(".comparison.tmp-")
-    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
-
-
-def test_a_failing_figure_leaves_the_previous_one(tmp_path, monkeypatch):
-    agg = seeds.aggregate(seeds.collect(_sweep(tmp_path / "b")))
-    path = tmp_path / "comparison.png"
-    path.write_bytes(b"old")
-    import matplotlib.figure
-
-    def broken(self, *args, **kwargs):
-        raise OSError(28, "No space left on device")
-
-    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", broken)
-    with pytest.raises(OSError):
-        seeds.comparison_figure(agg, path)
-    assert path.read_bytes() == b"old"
-    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
-
-
-def test_the_summary_and_figure_show_both_classifiers_folded_cross_modal_cells(tmp_path):
-    metrics = [
-        "coherence_folded_T_given_S",
-        "coherence_folded_second_T_given_S",
-        "coherence_folded_second_T_given_T",  # a reconstruction: not cross-modal
-        "coherence_folded_sampled_T_given_S",  # sampled: not the posterior mean
-    ]
-    assert seeds.cross_modal(metrics, folded=True) == metrics[:2]
-    assert seeds.cross_modal(metrics) == []
-    assert seeds._cell_label(metrics[1]) == "T|S 2nd" and seeds._cell_label(metrics[0]) == "T|S"
-    values = {
-        "cvae": {
-            "coherence_T_given_S": {0: 0.84, 1: 0.83, 2: 0.85},
-            "coherence_folded_T_given_S": {0: 0.87, 1: 0.86, 2: 0.88},
-            "coherence_folded_second_T_given_S": {0: 0.52, 1: 0.50, 2: 0.54},
-        }
-    }
-    agg = seeds.aggregate(values)
-    text = seeds.summary_markdown(agg)
-    assert "| `coherence_folded_second_T_given_S` | 0.520 [" in text  # (0.52 + 0.50 + 0.54) / 3
-    assert "| `coherence_folded_T_given_S` | 0.870 [" in text
-    assert seeds.comparison_figure(agg, tmp_path / "c.png").read_bytes()[:4] == b"\x89PNG"
-
-
-def test_the_summary_only_aggregate_shows_the_same_summary_and_drops_the_rest(tmp_path):
-    root = _sweep(tmp_path / "b", ["cvae", "avae_ts"], [0, 1, 2])
-    agg = seeds.json_ready(seeds.aggregate(seeds.collect(root)))
-    slim = seeds.summary_only(agg)
-    assert seeds.summary_markdown(slim) == seeds.summary_markdown(agg)
-    kept = {m for rows in slim["summaries"].values() for m in rows}
-    assert "coherence_T_given_S" in kept and "real/likeness_val_writers_legible" not in kept
-    assert {c["metric"] for c in slim["comparisons"]} <= kept
-    assert len(json.dumps(slim)) < len(json.dumps(agg))
