@@ -204,7 +204,7 @@ TABLE: dict[str, Range] = {
     "model.module.optimizer.momentum": Range(0, 1, high_open=True),
     "model.module.scheduler.max_lr": positive(10),
     "model.module.scheduler.pct_start": FRACTION,
-    "model.module.top_warmup_epochs": count(0),
+    "model.module.kl_warmup_epochs": count(0),
     "model.module.image_shift": IMAGE_SHIFT,
     "trainer.max_epochs": count(1, also=(-1,)),
     "trainer.max_steps": count(1, also=(-1,)),

@@ -138,8 +138,8 @@ def load_model(path: str | os.PathLike) -> tuple[MultimodalVAE, dict[str, Any]]:
     except Exception as err:  # wrong keys or shapes: written by another version of the code
         first = " ".join(str(err).split())[:200]
         raise UsageError(f"checkpoint {path} does not match this code's models: {first}") from None
-    if hasattr(model, "top_scale") and "top_scale" in ckpt:
-        model.top_scale = ckpt["top_scale"]
+    if hasattr(model, "kl_scale") and "kl_scale" in ckpt:
+        model.kl_scale = ckpt["kl_scale"]
     info = {k: v for k, v in ckpt.items() if k in ("mlflow_run_id", "epoch", "global_step")}
     if HANDS_KEY in ckpt:
         try:

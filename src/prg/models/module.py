@@ -37,10 +37,11 @@ class PRGModule(L.LightningModule):
         Partial learning-rate scheduler config stepped once per optimizer step, called as
         ``scheduler(optimizer, total_steps=<the run's optimizer steps>)`` (e.g.
         ``torch.optim.lr_scheduler.OneCycleLR``); ``None``: a constant learning rate.
-    top_warmup_epochs : float
-        Linear warm-up of MUSE's top-level regularisers (the top KL, beta, and the subset
-        symmetric KL, delta; see :mod:`prg.models.muse`) over this many epochs, updated every
-        step (fractions allowed; 0: none).
+    kl_warmup_epochs : float
+        Linear warm-up of the latent regularisers of the families that have one (``kl_scale``:
+        MUSE's top-level KL, beta, and subset symmetric KL, delta, see :mod:`prg.models.muse`;
+        MVAE's KL terms, see :mod:`prg.models.mvae`) over this many epochs, updated every step
+        (fractions allowed; 0: none).
     zero_init_trajectory : bool
         Start every trajectory decoder's output layer at zero
         (:meth:`~prg.models.components.TrajectoryDecoder.zero_output_layer`): smooth letters
@@ -57,7 +58,7 @@ class PRGModule(L.LightningModule):
         model: dict[str, Any],
         optimizer: dict[str, Any],
         scheduler: dict[str, Any] | None = None,
-        top_warmup_epochs: float = 0,
+        kl_warmup_epochs: float = 0,
         zero_init_trajectory: bool = False,
         image_shift: int = 0,
     ):
@@ -69,7 +70,7 @@ class PRGModule(L.LightningModule):
                 "model": model,
                 "optimizer": optimizer,
                 "scheduler": scheduler,
-                "top_warmup_epochs": top_warmup_epochs,
+                "kl_warmup_epochs": kl_warmup_epochs,
                 "zero_init_trajectory": zero_init_trajectory,
                 "image_shift": image_shift,
             }
@@ -81,10 +82,10 @@ class PRGModule(L.LightningModule):
                     decoder.zero_output_layer()
         self._sums: dict[str, dict[str, torch.Tensor]] = {}
         self._counts: dict[str, int] = {}
-        if isinstance(top_warmup_epochs, bool) or not (
-            isinstance(top_warmup_epochs, int | float) and top_warmup_epochs >= 0
+        if isinstance(kl_warmup_epochs, bool) or not (
+            isinstance(kl_warmup_epochs, int | float) and kl_warmup_epochs >= 0
         ):
-            raise UsageError(f"top_warmup_epochs must be a number >= 0, got {top_warmup_epochs!r}")
+            raise UsageError(f"kl_warmup_epochs must be a number >= 0, got {kl_warmup_epochs!r}")
         if isinstance(image_shift, bool) or not (isinstance(image_shift, int) and image_shift >= 0):
             raise UsageError(
                 f"image_shift must be a whole number of pixels >= 0, got {image_shift!r}"
@@ -111,15 +112,15 @@ class PRGModule(L.LightningModule):
                 )
 
     def on_train_batch_start(self, batch: Any, batch_idx: int) -> None:
-        """Set MUSE's ``top_scale`` to the fraction of the warm-up done at this step.
+        """Set ``kl_scale`` (MUSE, MVAE) to the fraction of the warm-up done at this step.
 
-        The warm-up counts optimizer steps, ``top_warmup_epochs`` times the batches of an
+        The warm-up counts optimizer steps, ``kl_warmup_epochs`` times the batches of an
         epoch, so short runs (the demo's 300-batch epochs) warm up as smoothly as long ones.
         """
-        warmup = self.hparams.top_warmup_epochs
-        if hasattr(self.model, "top_scale"):
+        warmup = self.hparams.kl_warmup_epochs
+        if hasattr(self.model, "kl_scale"):
             steps = warmup * max(1, int(self.trainer.num_training_batches))
-            self.model.top_scale = min(1.0, (self.global_step + 1) / steps) if warmup else 1.0
+            self.model.kl_scale = min(1.0, (self.global_step + 1) / steps) if warmup else 1.0
 
     def _step(
         self,
@@ -154,8 +155,8 @@ class PRGModule(L.LightningModule):
         self._log_epoch("test")
 
     def on_save_checkpoint(self, checkpoint: dict[str, Any]) -> None:
-        if hasattr(self.model, "top_scale"):  # a plain attribute, not in the state dict
-            checkpoint["top_scale"] = float(self.model.top_scale)
+        if hasattr(self.model, "kl_scale"):  # a plain attribute, not in the state dict
+            checkpoint["kl_scale"] = float(self.model.kl_scale)
         # the training writers' original letters: the hands a generated word is written in
         # (prg.pipeline.hands), so a checkpoint writes without its dataset
         datamodule = getattr(self._trainer, "datamodule", None) if self._trainer else None
@@ -166,8 +167,8 @@ class PRGModule(L.LightningModule):
             checkpoint[CHECKPOINT_KEY] = HandBank.from_split(letters).to_checkpoint()
 
     def on_load_checkpoint(self, checkpoint: dict[str, Any]) -> None:
-        if hasattr(self.model, "top_scale") and "top_scale" in checkpoint:
-            self.model.top_scale = checkpoint["top_scale"]
+        if hasattr(self.model, "kl_scale") and "kl_scale" in checkpoint:
+            self.model.kl_scale = checkpoint["kl_scale"]
 
     def training_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> torch.Tensor:
         shift = self.hparams.get("image_shift", 0)  # absent from checkpoints saved before it

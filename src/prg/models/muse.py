@@ -18,7 +18,7 @@ Loss per sample, averaged over the batch (weights by role, the paper's defaults)
   average code; the candidates j are the batch's samples or, with ``mode_bank`` N > 0, the last
   N samples of each class seen in training
 
-The top KL and subset SKL, the top level's regularisers, are multiplied by ``top_scale`` (1
+The top KL and subset SKL, the top level's regularisers, are multiplied by ``kl_scale`` (1
 outside training), which the training loop can ramp up from 0: both are minimised by experts
 that say nothing (an expert with a huge variance leaves every product unchanged), so at full
 weight from the first step, while the bottom codes still move, an expert can be driven to a
@@ -100,7 +100,7 @@ class MUSE(MultimodalVAE):
                     if m != "label"
                 }
             )
-        self.top_scale = 1.0  # the training loop's warm-up of the top-level regularisers
+        self.kl_scale = 1.0  # the training loop's warm-up of the top-level regularisers
         self.top_latent_dim = top_latent_dim
         self.encoders = nn.ModuleDict(
             {m: MODALITIES[m].encoder(latent_dim) for m in self.modalities}
@@ -188,7 +188,7 @@ class MUSE(MultimodalVAE):
                 experts, codes, batch["label"], terms
             )
         terms["top_kl"] = kl_standard_normal(q_all.mu, q_all.logvar).mean()
-        loss = loss + self.beta * self.top_scale * terms["top_kl"]
+        loss = loss + self.beta * self.kl_scale * terms["top_kl"]
         subset_posteriors = [
             self._fuse({m: experts[m] for m in s}) for s in proper_subsets(self.modalities)
         ]
@@ -196,7 +196,7 @@ class MUSE(MultimodalVAE):
             [symmetric_kl(q.mu, q.logvar, q_all.mu, q_all.logvar).mean() for q in subset_posteriors]
         ).mean()
         terms["subset_skl"] = skl
-        terms["loss"] = loss + self.delta * self.top_scale * skl
+        terms["loss"] = loss + self.delta * self.kl_scale * skl
         return terms
 
     def _mode_seeking(self, experts, codes, labels, terms) -> torch.Tensor:

@@ -30,7 +30,7 @@ def test_paper_profile_keeps_the_papers_hyper_parameters(family, tmp_path):
     assert cfg.model.batch_size == PAPER_BATCH[family]
     assert module.optimizer._target_ == "torch.optim.Adam" and module.optimizer.lr == 1e-4
     assert module.scheduler is None and not module.zero_init_trajectory
-    assert module.get("top_warmup_epochs", 0) == 0 and module.image_shift == 0
+    assert module.get("kl_warmup_epochs", 0) == 0 and module.image_shift == 0
     assert cfg.trainer.precision == "32-true" and cfg.trainer.max_epochs == 50
 
 

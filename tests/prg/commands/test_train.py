@@ -93,7 +93,7 @@ def test_quick_profile_trains_with_the_recipe_on_the_cpu(tmp_path, small_dataset
     assert result.trainer.precision == "bf16-mixed"
     scheduler = result.trainer.lr_scheduler_configs[0].scheduler
     assert type(scheduler).__name__ == "OneCycleLR" and scheduler.total_steps == 6
-    assert result.module.model.top_scale == 1.0  # a 1-epoch warm-up is over after 2 epochs
+    assert result.module.model.kl_scale == 1.0  # a 1-epoch warm-up is over after 2 epochs
     run = _client(tmp_path).get_run(result.run_id)
     assert run.data.tags["prg.experiment"] == "quick" and run.info.status == "FINISHED"
 

@@ -556,7 +556,7 @@ def test_muse_elbo_terms_match_torch_distributions_and_a_hand_product_of_experts
     model = make_model(
         "muse", lambdas=lambdas, alphas=alphas, gammas=gammas, beta=0.6, delta=2.2, traj_std=0.3
     )
-    model.top_scale = 0.4
+    model.kl_scale = 0.4
     alphas = {**alphas, "image": 1.0}  # the default of the one left out
     batch = make_batch(6, seed=9)
     torch.manual_seed(12)

@@ -82,21 +82,21 @@ def test_prg_module_round_trips_through_a_lightning_checkpoint(family, tmp_path)
 
 def test_prg_module_checkpoint_keeps_the_top_warm_up_state(tmp_path):
     torch.manual_seed(0)
-    module = PRGModule(FAMILIES["muse"][0], ADAM, top_warmup_epochs=2)
+    module = PRGModule(FAMILIES["muse"][0], ADAM, kl_warmup_epochs=2)
     path = _fit_two_batches(module, ALL, tmp_path)
     loaded = PRGModule.load_from_checkpoint(path)
-    assert 0 < module.model.top_scale < 1
-    assert loaded.model.top_scale == pytest.approx(module.model.top_scale)
+    assert 0 < module.model.kl_scale < 1
+    assert loaded.model.kl_scale == pytest.approx(module.model.kl_scale)
 
 
 def test_prg_module_warms_up_the_muse_top_regularisers_linearly_per_step():
-    module = PRGModule(FAMILIES["muse"][0], ADAM, top_warmup_epochs=1.5)
+    module = PRGModule(FAMILIES["muse"][0], ADAM, kl_warmup_epochs=1.5)
     batches = [make_batch(8, seed=s, modalities=ALL) for s in range(4)]
     scales = []
 
     class Record(L.Callback):
         def on_train_batch_end(self, trainer, pl_module, outputs, batch, batch_idx):
-            scales.append(pl_module.model.top_scale)
+            scales.append(pl_module.model.kl_scale)
 
     trainer = _trainer(max_epochs=2, limit_val_batches=0, callbacks=[Record()])
     trainer.fit(module, DataLoader(batches, batch_size=None))
@@ -104,13 +104,13 @@ def test_prg_module_warms_up_the_muse_top_regularisers_linearly_per_step():
     assert scales == pytest.approx([min(1.0, (i + 1) / steps) for i in range(8)])
 
 
-def test_top_scale_weights_the_top_kl_and_the_subset_skl():
+def test_kl_scale_weights_the_top_kl_and_the_subset_skl():
     torch.manual_seed(0)
     model = PRGModule(FAMILIES["muse"][0], ADAM).model
     batch = make_batch(8, seed=1, modalities=ALL)
 
     def loss_at(scale):
-        model.top_scale = scale
+        model.kl_scale = scale
         torch.manual_seed(2)
         return model.elbo(batch)
 
@@ -123,8 +123,8 @@ def test_top_scale_weights_the_top_kl_and_the_subset_skl():
 
 @pytest.mark.parametrize("bad", [-1, "two", True])
 def test_prg_module_refuses_a_bad_warm_up(bad):
-    with pytest.raises(UsageError, match="top_warmup_epochs must be a number >= 0"):
-        PRGModule(FAMILIES["cvae"][0], ADAM, top_warmup_epochs=bad)
+    with pytest.raises(UsageError, match="kl_warmup_epochs must be a number >= 0"):
+        PRGModule(FAMILIES["cvae"][0], ADAM, kl_warmup_epochs=bad)
 
 
 def test_one_cycle_schedule_spans_the_run_and_steps_per_batch():

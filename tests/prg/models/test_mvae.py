@@ -1,5 +1,5 @@
 """Tests of ``prg.models.mvae``: the product of experts with the prior expert, the subsampled
-ELBO against a hand computation, training on the small dataset, and the interface over every
+ELBO against a hand computation (during the KL warm-up too), training on the small dataset, and the interface over every
 input subset."""
 
 from __future__ import annotations
@@ -64,8 +64,10 @@ def test_encode_is_the_precision_weighted_product_with_the_prior_expert():
     )
 
 
-def test_loss_is_the_sum_of_the_joint_and_single_elbos_computed_by_hand():
+@pytest.mark.parametrize("kl_scale", [1.0, 0.3])  # 0.3: part-way through the KL warm-up
+def test_loss_is_the_sum_of_the_joint_and_single_elbos_computed_by_hand(kl_scale):
     model = tiny_mvae(weights={"traj": 2.0, "label": 50.0}, beta=0.5)
+    model.kl_scale = kl_scale
     g = torch.Generator().manual_seed(3)
     batch = {"traj": torch.randn(2, 200, generator=g) * 0.3, "label": torch.tensor([4, 17])}
     terms = model.elbo(batch)
@@ -77,7 +79,7 @@ def test_loss_is_the_sum_of_the_joint_and_single_elbos_computed_by_hand():
     for name in ("TS", "T", "S"):
         mean, var = poe([experts[c][0] for c in name], [experts[c][1] for c in name], prior=True)
         z = mean + np.sqrt(var) * EPS[name]
-        nelbo = 0.5 * kl_std_normal(mean, var)
+        nelbo = 0.5 * kl_scale * kl_std_normal(mean, var)
         if "T" in name:
             nelbo = nelbo - 2.0 * traj_logp(z @ w_t.T + b_t, x)
         if "S" in name:
