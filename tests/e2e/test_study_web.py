@@ -22,9 +22,9 @@ import pytest
 
 from studies.analysis.schema import STUDY1_COLUMNS, STUDY2_COLUMNS
 from studies.analysis.validate import ResponseFileError, load_responses
-from studies.bundle import response_columns
 from studies.cli import main
 from studies.design import assign_row, fnv1a32
+from studies.pages import response_columns
 from tests.helpers.browser import read_csv, robot_dir, serve
 from tests.helpers.study_web import (  # noqa: F401 (fixtures)
     PROLIFIC,
