@@ -41,7 +41,6 @@ import hashlib
 import json
 import logging
 import os
-import shutil
 import time
 from contextlib import AbstractContextManager, ExitStack, nullcontext
 from dataclasses import dataclass
@@ -59,7 +58,7 @@ from prg.data.datamodule import PRGDataModule, read_manifest
 from prg.errors import PRGError, UsageError
 from prg.files import sha256_file, staged_outputs, write_json
 from prg.locks import folder_locks
-from prg.models.checkpoint import read_checkpoint
+from prg.models.checkpoint import read_checkpoint, without_run_facts
 from prg.models.module import PRGModule
 from prg.resources import git_commit
 from prg.tracking import (
@@ -434,11 +433,14 @@ def history_rows(client, run_id: str) -> list[dict[str, float]]:
 def _export(
     folder: Path, best: str, metrics: dict[str, float], run_id: str, cfg, history: list[dict]
 ) -> None:
-    """Copy the best checkpoint to ``<folder>/model.ckpt``, write ``metrics.json`` and the
-    per-epoch curves ``history.csv`` (DVC metrics and plots); all are complete before any
-    replaces the previous export."""
+    """Write the best checkpoint without its run facts to ``<folder>/model.ckpt``
+    (:func:`~prg.models.checkpoint.without_run_facts`: the same training gives the same bytes),
+    ``metrics.json`` (with the MLflow run id) and the per-epoch curves ``history.csv`` (DVC
+    metrics and plots); all are complete before any replaces the previous export."""
+    import torch
+
     with staged_outputs(folder) as staging:
-        shutil.copyfile(best, staging / "model.ckpt")
+        torch.save(without_run_facts(read_checkpoint(best)), staging / "model.ckpt")
         columns = ["epoch", "step", *(k.replace("/", "_") for k in HISTORY_METRICS)]
         lines = [",".join(columns)]
         lines += [",".join(f"{row.get(c, '')}" for c in columns) for row in history]

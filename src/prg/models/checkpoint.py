@@ -9,6 +9,7 @@ is built."""
 from __future__ import annotations
 
 import importlib
+import json
 import os
 import pickle
 import re
@@ -21,6 +22,18 @@ from prg.data.hands import CHECKPOINT_KEY as HANDS_KEY
 from prg.data.hands import HandBank
 from prg.errors import UsageError
 from prg.models.base import MultimodalVAE
+
+#: Entries of a training checkpoint that describe the run, not the model: the MLflow run and
+#: store, the callbacks' state (the checkpoint folder's paths) and the job identity that resuming
+#: matches (it hashes the resolved config, paths included). An exported ``model.ckpt`` leaves
+#: them out (:func:`without_run_facts`), so the same training gives the same file wherever it
+#: ran and whatever run logged it; its run id is in the ``metrics.json`` beside it.
+RUN_FACTS = ("mlflow_run_id", "mlflow_tracking_uri", "callbacks", "prg_job")
+
+
+def without_run_facts(ckpt: dict[str, Any]) -> dict[str, Any]:
+    """``ckpt`` without :data:`RUN_FACTS` (a shallow copy)."""
+    return {k: v for k, v in ckpt.items() if k not in RUN_FACTS}
 
 
 def read_checkpoint(path: str | os.PathLike) -> dict[str, Any]:
@@ -119,9 +132,21 @@ def _allowed(target: Any) -> bool:
     return False
 
 
+def _exported_run(path: Path) -> dict[str, str]:
+    """``{"mlflow_run_id": ...}`` from the ``metrics.json`` that ``prg-train`` exports beside a
+    ``model.ckpt``; empty when there is none or it names no run."""
+    try:
+        exported = json.loads((path.parent / "metrics.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    run_id = exported.get("mlflow_run_id") if isinstance(exported, dict) else None
+    return {"mlflow_run_id": run_id} if isinstance(run_id, str) and run_id else {}
+
+
 def load_model(path: str | os.PathLike) -> tuple[MultimodalVAE, dict[str, Any]]:
     """The trained model of a checkpoint (eval mode, CPU) and the checkpoint's extra entries
-    (``mlflow_run_id``, ``epoch``, ``global_step`` ... ; no weights), and ``hands``: the
+    (``mlflow_run_id``, from the ``metrics.json`` beside an exported ``model.ckpt``; ``epoch``,
+    ``global_step``; no weights), and ``hands``: the
     training writers' letters (:class:`~prg.data.hands.HandBank`) when the checkpoint has them.
 
     Built from the checkpoint's ``model`` hyper-parameters and the ``model.``-prefixed weights of
@@ -141,6 +166,8 @@ def load_model(path: str | os.PathLike) -> tuple[MultimodalVAE, dict[str, Any]]:
     if hasattr(model, "kl_scale") and "kl_scale" in ckpt:
         model.kl_scale = ckpt["kl_scale"]
     info = {k: v for k, v in ckpt.items() if k in ("mlflow_run_id", "epoch", "global_step")}
+    if "mlflow_run_id" not in info:  # an exported model.ckpt: the run is named beside it
+        info.update(_exported_run(Path(path)))
     if HANDS_KEY in ckpt:
         try:
             info[HANDS_KEY] = HandBank.from_checkpoint(ckpt[HANDS_KEY])

@@ -66,11 +66,21 @@ def test_resume_from_last_checkpoint_continues_the_same_run(tmp_path, small_data
     )
 
 
-def test_same_seed_same_first_epoch_losses(tmp_path, small_dataset):
-    a = train(_cfg(tmp_path / "a", small_dataset, "model=cvae", "trainer.max_epochs=1"))
-    b = train(_cfg(tmp_path / "b", small_dataset, "model=cvae", "trainer.max_epochs=1"))
+def test_same_seed_same_losses_and_the_same_exported_file(tmp_path, small_dataset):
+    from prg.models.checkpoint import RUN_FACTS, load_model
+
+    def run(name):  # another project root: another MLflow store, run id and checkpoint folder
+        root = tmp_path / name
+        args = ("model=cvae", "trainer.max_epochs=1", f"export_dir={root}/export")
+        return train(_cfg(root, small_dataset, *args)), root / "export" / "model.ckpt"
+
+    (a, a_file), (b, b_file) = run("a"), run("b")
     assert a.metrics["train/loss"] == b.metrics["train/loss"]
     assert a.metrics["val/loss"] == b.metrics["val/loss"]
+    assert a.run_id != b.run_id
+    assert a_file.read_bytes() == b_file.read_bytes()  # no run facts inside
+    assert not set(RUN_FACTS) & set(torch.load(a_file, weights_only=True))
+    assert load_model(a_file)[1]["mlflow_run_id"] == a.run_id  # from metrics.json beside it
 
 
 def test_paper_profile_registers_the_best_checkpoint(tmp_path, small_dataset):
