@@ -255,23 +255,25 @@ def evaluate(
                 pending.append((seed, family))
     if jobs > 1:  # each evaluation one share of the cores, unless the caller chose
         env.setdefault("OMP_NUM_THREADS", str(max(1, (os.cpu_count() or 1) // jobs)))
-    running: dict[int, tuple[int, str, float]] = {}
+    # the Popen objects stay referenced until their child is reaped here: a dropped one is
+    # polled (reaped) by the next Popen's clean-up, and os.wait4 would never see that child
+    running: dict[int, tuple[int, str, float, subprocess.Popen]] = {}
     failed = 0
     while pending or running:
         while pending and len(running) < jobs and not failed:
             seed, family = pending.pop(0)
             args = evaluate_overrides(folder, family, seed, root, extra)
             child = subprocess.Popen([_command("prg-evaluate"), *args], env=env)
-            running[child.pid] = (seed, family, time.perf_counter())
+            running[child.pid] = (seed, family, time.perf_counter(), child)
         if not running:
             break
         # wait4, not Popen.wait: the finished child's own CPU time, whatever else runs
         pid, status, usage = os.wait4(-1, 0)
         if pid not in running:
             continue
-        seed, family, start = running.pop(pid)
+        seed, family, start, child = running.pop(pid)
         wall = time.perf_counter() - start
-        code = os.waitstatus_to_exitcode(status)
+        code = child.returncode = os.waitstatus_to_exitcode(status)
         if code:
             failed = failed or code
             continue

@@ -140,6 +140,22 @@ def test_evaluations_run_jobs_at_a_time_each_timed_by_its_own_cpu(tmp_path, monk
     ]
 
 
+def test_a_child_that_ends_while_the_next_starts_is_still_waited_for(tmp_path, monkeypatch):
+    # each start takes longer than an evaluation: the previous child has ended by the time the
+    # scheduler moves on, and a Popen it no longer held would reap it behind os.wait4's back
+    import subprocess
+
+    class SlowStart(subprocess.Popen):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            time.sleep(1.2)
+
+    root = _stand_in_sweep(tmp_path, monkeypatch, ["cvae", "muse"], [0, 1])
+    monkeypatch.setattr(baselines.subprocess, "Popen", SlowStart)
+    done = baselines.evaluate(root, ["cvae", "muse"], [0, 1], [], None, tmp_path, jobs=2)
+    assert sorted(done) == [(s, f, "evaluated") for s in (0, 1) for f in ("cvae", "muse")]
+
+
 def test_a_failed_evaluation_lets_the_running_one_finish_and_starts_no_more(tmp_path, monkeypatch):
     root = _stand_in_sweep(tmp_path, monkeypatch, ["cvae", "muse"], [0, 1, 2])
     monkeypatch.setenv("FAIL_FAMILY", "cvae")
