@@ -103,3 +103,22 @@ def test_checkpoint_of_another_family_is_refused(tmp_path, small_dataset):
     )
     assert result.returncode == 2
     assert "holds a prg.models.cvae.CVAE model" in result.stderr
+
+
+def test_bf16_on_a_cpu_without_bf16_kernels_trains_in_fp32(tmp_path, small_dataset):
+    held_to_avx2 = {"ONEDNN_MAX_CPU_ISA": "AVX2", "MKL_ENABLE_INSTRUCTIONS": "AVX2"}
+    result = run_cli(
+        "prg-train",
+        "model=cvae",
+        "trainer.precision=bf16-mixed",
+        f"paths.root_dir={tmp_path}",
+        f"paths.data_dir={small_dataset}",
+        *FAST,
+        env=held_to_avx2,
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert "trainer.precision=bf16-mixed: this CPU has no bf16 kernels" in result.stdout
+    run = _client(tmp_path).search_runs(
+        [_client(tmp_path).get_experiment_by_name("prg").experiment_id]
+    )[0]
+    assert run.data.params["trainer.precision"] == "32-true"

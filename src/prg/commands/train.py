@@ -302,6 +302,7 @@ def train(cfg: DictConfig) -> TrainResult:
 def _train(cfg: DictConfig, held: ExitStack) -> TrainResult:
     check_values(cfg)
     train_settings(cfg)
+    _fit_precision(cfg)
     manifest, manifest_hash = _manifest(cfg)
     check_output(cfg.checkpoint_dir, "checkpoint_dir")
     if cfg.get("export_dir"):
@@ -428,6 +429,22 @@ def history_rows(client, run_id: str) -> list[dict[str, float]]:
             row = rows.setdefault(m.step, {"epoch": epoch_at.get(m.step, -1), "step": m.step})
             row[key.replace("/", "_")] = m.value
     return [rows[step] for step in sorted(rows) if "val_loss" in rows[step]]
+
+
+def _fit_precision(cfg: DictConfig) -> None:
+    """bf16 autocast only where this machine has bf16 kernels (:mod:`prg.training.precision`)."""
+    from prg.training.precision import cpu_has_bf16, trains_on_gpu, usable_precision
+
+    asked = str(cfg.trainer.precision)
+    usable = usable_precision(asked, trains_on_gpu(cfg.trainer.accelerator), cpu_has_bf16())
+    if usable != asked:
+        log.warning(
+            "trainer.precision=%s: this CPU has no bf16 kernels, where autocast emulates bf16 "
+            "many times slower; training in %s",
+            asked,
+            usable,
+        )
+        cfg.trainer.precision = usable
 
 
 def _export(
