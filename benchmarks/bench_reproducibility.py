@@ -10,11 +10,12 @@ retraining with another seed gives.
 
 Usage::
 
-    python benchmarks/bench_reproducibility.py RUN_A RUN_B [--family cvae]
+    python benchmarks/bench_reproducibility.py RUN_A RUN_B [--family cvae] [--seed S]
         [--seeds benchmarks/results/baselines/seeds]
 
 ``RUN_A`` and ``RUN_B`` are sweep-shaped folders (``seed<s>/reports/<family>/metrics.json``,
-as :mod:`prg.commands.baselines` evaluates them), each with the same seed. Prints a table and
+as :mod:`prg.commands.baselines` evaluates them); the seed compared is the one both have, or
+``--seed``. Prints a table and
 writes ``benchmarks/results/bench_reproducibility.json``.
 """
 
@@ -82,11 +83,14 @@ def summary(rows: list[dict]) -> dict:
 def main(argv: list[str] | None = None) -> int:
     from prg.evaluation.seeds import collect, json_ready
     from prg.files import write_json
+    from prg.resources import project_path
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("run_a", type=Path)
     parser.add_argument("run_b", type=Path)
     parser.add_argument("--family", default="cvae")
+    parser.add_argument("--seed", type=int, help="the seed to compare (default: the one both have)")
+    parser.add_argument("--label", default="run B", help="what run B is, for the summary table")
     parser.add_argument("--seeds", type=Path, default=RESULTS / "baselines" / "seeds")
     args = parser.parse_args(argv)
     from prg.errors import UsageError
@@ -97,25 +101,30 @@ def main(argv: list[str] | None = None) -> int:
     except UsageError as err:
         print(f"bench_reproducibility: {err}", file=sys.stderr)
         return 2
-    (seed_a,), (seed_b,) = (set(next(iter(r[args.family].values()))) for r in runs)
-    if seed_a != seed_b:
+    seeds_a, seeds_b = (set(next(iter(r[args.family].values()))) for r in runs)
+    common = sorted(seeds_a & seeds_b) if args.seed is None else [args.seed]
+    if len(common) != 1 or not {common[0]} <= seeds_a & seeds_b:
         print(
-            f"bench_reproducibility: the runs are of seeds {seed_a} and {seed_b}", file=sys.stderr
+            f"bench_reproducibility: the runs have seeds {sorted(seeds_a)} and {sorted(seeds_b)}: "
+            "give --seed, one seed both have",
+            file=sys.stderr,
         )
         return 2
-    a, b = ({m: v[seed_a] for m, v in r[args.family].items()} for r in runs)
+    seed_a = common[0]
+    a, b = ({m: v[seed_a] for m, v in r[args.family].items() if seed_a in v} for r in runs)
     rows = compare(a, b, reference[args.family])
     result = {
         "family": args.family,
         "seed": seed_a,
-        "run_a": str(args.run_a),
-        "run_b": str(args.run_b),
-        "seeds": str(args.seeds),
+        "label": args.label,
+        "run_a": project_path(args.run_a, ROOT),
+        "run_b": project_path(args.run_b, ROOT),
+        "seeds": project_path(args.seeds, ROOT),
         **summary(rows),
     }
     print(
         f"{args.family} seed {seed_a}: {len(rows)} reported metrics, |A - B| against the sd "
-        f"over {args.family}'s seeds in {args.seeds}"
+        f"over {args.family}'s seeds in {result['seeds']}"
     )
     print(f"{'metric':55s} {'A':>9s} {'B':>9s} {'|A-B|':>8s} {'seeds sd':>9s} {'ratio':>6s}")
     for r in result["largest"]:

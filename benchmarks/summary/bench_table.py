@@ -7,7 +7,13 @@ from collections.abc import Callable
 from pathlib import Path
 
 from .common import RESULTS, Row, SummaryError, ratio_text, read_json, table
-from .rows_models import evaluate_rows, prepare_rows, startup_rows, train_rows
+from .rows_models import (
+    evaluate_rows,
+    prepare_rows,
+    reproducibility_rows,
+    startup_rows,
+    train_rows,
+)
 from .rows_speech import speech_rows
 from .rows_writing import (
     connections_rows,
@@ -33,6 +39,7 @@ BENCHMARKS: dict[str, Callable[[dict], list[Row]]] = {
     "bench_speech_other_words": speech_rows,
     "bench_simulate": simulate_rows,
     "bench_startup": startup_rows,
+    "bench_reproducibility": reproducibility_rows,
 }
 
 

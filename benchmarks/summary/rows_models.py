@@ -115,3 +115,24 @@ def startup_rows(d: dict) -> list[Row]:
         )
         for r in d["rows"][1:]  # the first row is the floor itself
     ]
+
+
+def reproducibility_rows(d: dict) -> list[Row]:
+    what = f"{d['family']} seed {d['seed']} trained again ({d.get('label', 'run B')})"
+    return [
+        Row(
+            f"{what}: median move of its {d['with_seed_sd']} reported metrics",
+            f"{d['median_ratio']:.2f} sd",
+            "the sd over its seeds",
+            "1 sd",
+            d["median_ratio"],
+            "< 1",
+        ),
+        Row(
+            f"{what}: metrics that move less than their seeds' sd",
+            f"{d['within_1_sd']} of {d['with_seed_sd']} (largest {d['max_ratio']:.1f} sd)",
+            "the sd over its seeds",
+            "1 sd",
+            d["max_ratio"],
+        ),
+    ]

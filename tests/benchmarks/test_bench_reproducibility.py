@@ -34,10 +34,12 @@ def test_each_move_is_a_ratio_to_the_seeds_sd():
     assert result["within_2_sd"] == 1 and result["max_ratio"] == pytest.approx(1.5)
 
 
-def test_runs_of_two_seeds_are_refused_in_one_line(tmp_path, capsys):
+def test_runs_without_a_common_seed_are_refused_in_one_line(tmp_path, capsys):
     for run, seed in (("a", 0), ("b", 1)):
         write_json(tmp_path / run / f"seed{seed}/reports/cvae/metrics.json", {"cvae/x": 1.0})
     write_json(tmp_path / "s/seed0/reports/cvae/metrics.json", {"cvae/x": 1.0})
     args = [str(tmp_path / "a"), str(tmp_path / "b"), "--seeds", str(tmp_path / "s")]
     assert bench.main(args) == 2
-    assert capsys.readouterr().err.strip() == "bench_reproducibility: the runs are of seeds 0 and 1"
+    assert capsys.readouterr().err.strip() == (
+        "bench_reproducibility: the runs have seeds [0] and [1]: give --seed, one seed both have"
+    )
