@@ -84,6 +84,21 @@ def test_same_seed_same_weights_and_predictions(splits):
     assert torch.equal(clf.predict(a, x), clf.predict(b, x))
 
 
+def test_the_weights_do_not_depend_on_the_callers_thread_count(splits):
+    # the judge of every seed and session: the same classifier however many threads torch has
+    threads = torch.get_num_threads()
+    try:
+        torch.set_num_threads(1)
+        a, _ = _train("image", splits)
+        torch.set_num_threads(2)
+        b, _ = _train("image", splits)
+        assert torch.get_num_threads() == 2  # the caller's setting is given back
+    finally:
+        torch.set_num_threads(threads)
+    for key, value in a.state_dict().items():
+        assert torch.equal(value, b.state_dict()[key]), key
+
+
 def test_predict_batches_give_the_same_classes(splits):
     model, _ = _train("traj", splits, epochs=1)
     x = _x("traj", splits["test"])
