@@ -63,6 +63,10 @@ class MVAE(MultimodalVAE):
         Weight of every KL term.
     random_subsets : int
         J, the random subsets whose ELBOs join the joint and single ones in each batch.
+    max_expert_logvar : float, optional
+        A smooth upper bound on each expert's log-variance in the product
+        (``b - softplus(b - logvar)``): an expert never says less than N(0, e^b), so the
+        product cannot ignore it. None: no bound (Wu & Goodman).
     """
 
     family = "mvae"
@@ -75,6 +79,7 @@ class MVAE(MultimodalVAE):
         weights: dict[str, float] | None = None,
         beta: float = 1.0,
         random_subsets: int = 0,
+        max_expert_logvar: float | None = None,
     ):
         super().__init__(tuple(modalities), latent_dim, traj_std)
         if len(self.modalities) < 2:
@@ -86,6 +91,7 @@ class MVAE(MultimodalVAE):
         self.weights = modality_weights(self.modalities, weights)
         self.beta, self.random_subsets = float(beta), random_subsets
         self.kl_scale = 1.0  # the training loop's warm-up of the KL terms
+        self.max_expert_logvar = None if max_expert_logvar is None else float(max_expert_logvar)
         self.experts = nn.ModuleDict(
             {m: MODALITIES[m].encoder(latent_dim) for m in self.modalities}
         )
@@ -99,9 +105,11 @@ class MVAE(MultimodalVAE):
 
     def posterior(self, experts: dict[str, tuple[torch.Tensor, torch.Tensor]]) -> Gaussian:
         """q(z | x_S): the product of the given experts' Gaussians and N(0, I)."""
-        return Gaussian(
-            *product_of_experts([e[0] for e in experts.values()], [e[1] for e in experts.values()])
-        )
+        logvars = [e[1] for e in experts.values()]
+        if self.max_expert_logvar is not None:
+            bound = self.max_expert_logvar
+            logvars = [bound - nn.functional.softplus(bound - lv) for lv in logvars]
+        return Gaussian(*product_of_experts([e[0] for e in experts.values()], logvars))
 
     def encode(self, inputs: Inputs) -> Gaussian:
         """q(z | x_S) for any non-empty subset S."""

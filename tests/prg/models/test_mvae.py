@@ -64,6 +64,18 @@ def test_encode_is_the_precision_weighted_product_with_the_prior_expert():
     )
 
 
+def test_a_bounded_expert_keeps_its_weight_in_the_product():
+    # each expert's log-variance through b - softplus(b - logvar), b = 0, before the product
+    model = tiny_mvae(max_expert_logvar=0.0)
+    model.experts["label"] = FixedExpert(MU_S, [[30.0, -2.0], [0.5, 0.0]])  # one silent expert
+    q = model.encode({"traj": torch.zeros(2, 200), "label": torch.zeros(2, dtype=torch.long)})
+    lv_s = -np.log1p(np.exp(-np.array([[30.0, -2.0], [0.5, 0.0]])))  # 0 - softplus(0 - lv)
+    lv_t = -np.log1p(np.exp(-np.array(LV_T)))
+    mean, var = poe([np.array(MU_T), np.array(MU_S)], [np.exp(lv_t), np.exp(lv_s)], prior=True)
+    np.testing.assert_allclose(q.mu.detach().numpy(), mean, rtol=1e-5)
+    np.testing.assert_allclose(q.logvar.exp().detach().numpy(), var, rtol=1e-5)
+
+
 @pytest.mark.parametrize("kl_scale", [1.0, 0.3])  # 0.3: part-way through the KL warm-up
 def test_loss_is_the_sum_of_the_joint_and_single_elbos_computed_by_hand(kl_scale):
     model = tiny_mvae(weights={"traj": 2.0, "label": 50.0}, beta=0.5)
