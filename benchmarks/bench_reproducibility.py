@@ -40,12 +40,14 @@ def reported(metric: str) -> bool:
 
 def compare(a: dict, b: dict, spread: dict) -> list[dict]:
     """One row per reported metric both runs have: values, |difference|, seeds' sd, ratio."""
+    from prg.evaluation.seeds import summarise
+
     rows = []
     for metric in sorted(set(a) & set(b)):
         if not reported(metric):
             continue
-        by_seed = list(spread.get(metric, {}).values())
-        sd = statistics.stdev(by_seed) if len(by_seed) > 1 else math.nan
+        by_seed = spread.get(metric, {})
+        sd = summarise(by_seed)["sd"] if by_seed else math.nan  # NaN for one seed
         diff = abs(a[metric] - b[metric])
         if math.isnan(sd):  # one seed: no spread to compare with
             ratio = math.nan

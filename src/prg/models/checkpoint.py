@@ -9,7 +9,6 @@ is built."""
 from __future__ import annotations
 
 import importlib
-import json
 import os
 import pickle
 import re
@@ -21,6 +20,7 @@ import torch
 from prg.data.hands import CHECKPOINT_KEY as HANDS_KEY
 from prg.data.hands import HandBank
 from prg.errors import UsageError
+from prg.files import read_json
 from prg.models.base import MultimodalVAE
 
 #: Entries of a training checkpoint that describe the run, not the model: the MLflow run and
@@ -136,8 +136,8 @@ def _exported_run(path: Path) -> dict[str, str]:
     """``{"mlflow_run_id": ...}`` from the ``metrics.json`` that ``prg-train`` exports beside a
     ``model.ckpt``; empty when there is none or it names no run."""
     try:
-        exported = json.loads((path.parent / "metrics.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        exported = read_json(path.parent / "metrics.json", "exported metrics")
+    except UsageError:
         return {}
     run_id = exported.get("mlflow_run_id") if isinstance(exported, dict) else None
     return {"mlflow_run_id": run_id} if isinstance(run_id, str) and run_id else {}
