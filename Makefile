@@ -8,11 +8,11 @@ EXTRAS ?= dev,docs,sweep,speech,speech-base,speech-moonshine,browser,lasa
 # runs the study pages in the browser tests (Playwright drives it; no `playwright install`)
 SYSTEM_PACKAGES ?= espeak-ng sox chromium
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
-STAMP := $(VENV)/.setup-$(shell cat pyproject.toml | sha1sum | cut -c1-12)
+STAMP := $(VENV)/.setup-$(shell cat pyproject.toml constraints.txt | sha1sum | cut -c1-12)
 export PATH := $(CURDIR)/$(BIN):$(PATH)
 
 .DEFAULT_GOAL := help
-.PHONY: help system setup demo baselines paper converged test test-all lint format bench results clean mutate docs
+.PHONY: help system setup constraints demo baselines paper converged test test-all lint format bench results clean mutate docs
 
 help: ## Show this help
 	@awk 'BEGIN {FS = ":.*## "} /^[a-zA-Z_-]+:.*## / {printf "  \033[36m%-10s\033[0m %s\n", $$1, $$2}' $(MAKEFILE_LIST)
@@ -21,10 +21,12 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 
-$(STAMP): pyproject.toml | $(BIN)/python
+# constraints.txt pins every other package to the versions the results were made with, so a
+# fresh machine installs the same numerics (`make constraints` writes it from the .venv).
+$(STAMP): pyproject.toml constraints.txt | $(BIN)/python
 	@# torch first: the pinned CPU wheel; a looser requirement would pull a multi-GB CUDA build
 	$(BIN)/pip install -q torch==2.13.0
-	$(BIN)/pip install -q -e ".[$(EXTRAS)]"
+	$(BIN)/pip install -q -c constraints.txt -e ".[$(EXTRAS)]"
 	@rm -f $(VENV)/.setup-*
 	@touch $@
 
@@ -174,6 +176,11 @@ mutate: setup ## Mutation testing of the numeric core with mutmut (slow; not in 
 			printf "  %-26s killed %4d  timeout %3d  survived %4d  no tests %3d  score %5.1f%%\n", \
 			k, c[k " killed"], c[k " timeout"], c[k " survived"], c[k " no"], \
 			100 * (c[k " killed"] + c[k " timeout"]) / n }}' | sort
+
+constraints: setup ## Pin the .venv's package versions (all but torch and prg) into constraints.txt
+	@{ echo "# Versions the project's results were made with (make constraints); pip install -c."; \
+	  $(BIN)/pip freeze --exclude-editable | grep -viE '^(torch|prg)==' | LC_ALL=C sort -f; } > constraints.txt.tmp
+	@mv constraints.txt.tmp constraints.txt && echo "constraints.txt: $$(grep -vc '^#' constraints.txt) packages"
 
 clean: ## Remove caches (keeps .venv, data and runs)
 	rm -rf .pytest_cache .ruff_cache .hypothesis
