@@ -212,7 +212,6 @@ def paired_tests(
     note = f"{n} {unit}s with both levels" + (
         f" ({dropped} dropped: one level only)" if dropped else ""
     )
-    sd = float(np.std(d, ddof=1)) if n > 1 else np.nan
     if n < 3 or constant(d):
         why = (
             "fewer than 3 pairs"
@@ -224,7 +223,7 @@ def paired_tests(
             name, why, null_hypothesis=f"{label} = 0", estimate=estimate, method=note, **base
         )
     mean = float(d.mean())
-    se = sd / math.sqrt(n)
+    se = float(np.std(d, ddof=1)) / math.sqrt(n)
     q = stats.t.ppf(1 - alpha / 2, n - 1)
     q2 = stats.t.ppf(1 - alpha, n - 1)
     tt = stats.ttest_rel(a, b)

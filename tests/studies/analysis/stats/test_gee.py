@@ -70,3 +70,214 @@ def test_gee_difference_is_the_difference_in_rates_with_cluster_robust_se(paired
         "GEE TOST (±0.1)",
         "GEE non-inferiority (margin 0.1)",
     ]
+
+
+# --------------------------------------------------------------------------- every argument
+
+
+def _rate_reference(df, outcome, cluster, chance):
+    y = df[outcome].to_numpy(dtype=float)
+    groups = pd.factorize(df[cluster])[0]
+    off = np.log(chance / (1 - chance))
+    ref = sm.GEE(
+        y,
+        np.ones((len(y), 1)),
+        groups=groups,
+        family=sm.families.Binomial(),
+        cov_struct=sm.cov_struct.Exchangeable(),
+        offset=np.full(len(y), off),
+    ).fit(cov_type="bias_reduced")
+    return float(ref.params[0]), float(ref.bse[0]), off, ref
+
+
+def _expit(x):
+    return 1 / (1 + np.exp(-x))
+
+
+def test_gee_rate_matches_statsmodels_gee_with_the_chance_offset_and_a_hand_tost():
+    df = binary_frame(150, 600, 30)
+    rows = S.gee_rate(df, "y", "participant_id", 0.3, margin=0.04, alpha=0.1)
+    b, se, off, ref = _rate_reference(df, "y", "participant_id", 0.3)
+    q, q2 = stats.norm.ppf(0.95), stats.norm.ppf(0.9)
+    close(
+        fields(rows.iloc[0], "estimate", "ci_low", "ci_high", "statistic", "p_value"),
+        [
+            _expit(off + b),
+            _expit(off + b - q * se),
+            _expit(off + b + q * se),
+            b / se,
+            ref.pvalues[0],
+        ],
+        1e-7,
+    )
+    lo_b = np.log(0.26 / 0.74) - off
+    up_b = np.log(0.34 / 0.66) - off
+    p_low, p_upp = stats.norm.sf((b - lo_b) / se), stats.norm.cdf((b - up_b) / se)
+    close(
+        fields(rows.iloc[1], "estimate", "ci_low", "ci_high", "p_value", "p_lower", "p_upper"),
+        [
+            _expit(off + b),
+            _expit(off + b - q2 * se),
+            _expit(off + b + q2 * se),
+            max(p_low, p_upp),
+            p_low,
+            p_upp,
+        ],
+        1e-7,
+    )
+    close(rows.ci_level, [0.9, 0.8])
+    assert rows.test.tolist() == ["GEE rate vs chance", "GEE TOST vs chance"]
+    assert rows.null_hypothesis.tolist() == ["rate = 0.3", "rate <= 0.26 or rate >= 0.34"]
+    assert (rows.n == 600).all() and (rows.clusters == 30).all() and (rows.alpha == 0.1).all()
+    rho = ref.model.cov_struct.dep_params
+    assert rows.method.iloc[0] == (
+        f"GEE logit, exchangeable (working ICC {rho:.3f}), bias-reduced robust SE, 30 clusters"
+    )
+    assert rows.conclusion.iloc[0].startswith("below chance (p = ")  # 0.25 < 0.3, 600 answers
+
+
+def test_gee_rate_defaults_side_and_cluster_count_note():
+    rng = np.random.default_rng(2)
+    df = pd.DataFrame(
+        {
+            "participant_id": np.repeat(np.arange(25), 8),
+            "chose_robot": (rng.random(200) < 0.4).astype(float),
+        }
+    )
+    rows = S.gee_rate(df)
+    assert len(rows) == 1 and rows.alpha.iloc[0] == 0.05 and rows.ci_level.iloc[0] == 0.95
+    *_, ref = _rate_reference(df, "chose_robot", "participant_id", 0.2)
+    close(rows.p_value, [ref.pvalues[0]], 1e-7)
+    assert rows.conclusion.iloc[0].startswith("above chance (p = ")
+    assert "fewer than 20 clusters" not in rows.method.iloc[0]  # 25 clusters
+    near = df.assign(chose_robot=(np.arange(200) % 5 == 0).astype(float))
+    row = S.gee_rate(near).iloc[0]
+    assert row.conclusion.startswith("not shown to differ from chance (p = ")
+    few = S.gee_rate(df[df.participant_id < 19]).iloc[0]
+    assert few.method.endswith("; fewer than 20 clusters: the robust SE is unreliable")
+    by_word = S.gee_rate(df.assign(word=np.tile(np.arange(8), 25)), cluster="word").iloc[0]
+    assert by_word.clusters == 8
+
+
+def test_gee_rate_not_estimable_rows_say_why_for_each_test():
+    rows = S.gee_rate(binary_frame(100, 100), "y", "participant_id", 0.2, margin=0.05, alpha=0.1)
+    assert rows.test.tolist() == ["GEE rate vs chance", "GEE TOST vs chance"]
+    assert (rows.conclusion == "not estimable: every answer is 1: the log-odds are infinite").all()
+    assert (rows.n == 100).all() and (rows.clusters == 10).all() and (rows.alpha == 0.1).all()
+    one = S.gee_rate(binary_frame(6, 10, participants=10), "y", cluster="word").iloc[0]
+    assert one.conclusion == "not estimable: needs answers from at least 2 words"
+    empty = S.gee_rate(pd.DataFrame({"participant_id": [0], "chose_robot": [np.nan]})).iloc[0]
+    assert empty.n == 0 and empty.clusters == 0 and empty.conclusion.startswith("not estimable")
+
+
+def test_gee_difference_at_another_level_with_swapped_levels_and_extra_conditions(paired_frame):
+    extra = paired_frame.iloc[:30].assign(writer="other")
+    df = pd.concat([paired_frame, extra])
+    rows = S.gee_difference(df, levels=("robot", "human"), margin=0.15, alpha=0.1)
+    x = (paired_frame.writer == "human").astype(float)
+    ref = sm.GEE(
+        paired_frame["correct"],
+        np.column_stack([np.ones(len(x)), x]),
+        groups=pd.factorize(paired_frame.participant_id)[0],
+        family=sm.families.Gaussian(),
+        cov_struct=sm.cov_struct.Exchangeable(),
+    ).fit(cov_type="bias_reduced")
+    d, se = ref.params.iloc[1], ref.bse.iloc[1]
+    q, q2 = stats.norm.ppf(0.95), stats.norm.ppf(0.9)
+    close(fields(rows.iloc[0], "estimate", "ci_low", "ci_high"), [d, d - q * se, d + q * se], 1e-7)
+    p1, p2 = stats.norm.sf((d + 0.15) / se), stats.norm.cdf((d - 0.15) / se)
+    close(fields(rows.iloc[1], "p_lower", "p_upper", "ci_low"), [p1, p2, d - q2 * se], 1e-7)
+    close(rows.ci_level, [0.9, 0.8, 0.9])
+    assert rows.null_hypothesis.tolist() == [
+        "human - robot = 0",
+        "human - robot <= -0.15 or >= 0.15",
+        "human - robot <= -0.15",
+    ]
+    assert (rows.n == 200).all() and (rows.clusters == 20).all() and (rows.alpha == 0.1).all()
+    rho = ref.model.cov_struct.dep_params
+    assert rows.method.iloc[0] == (
+        f"GEE identity link, exchangeable (working ICC {rho:.3f}), bias-reduced robust SE"
+    )
+    direction = "higher" if d > 0 else "lower"
+    if rows.reject.iloc[0]:
+        assert rows.conclusion.iloc[0].startswith(f"human {direction} than robot (p = ")
+    else:
+        assert rows.conclusion.iloc[0].startswith("difference not shown (p = ")
+    ni = rows.iloc[2]
+    assert ni.conclusion.startswith(
+        "non-inferior (p = " if ni.reject else "non-inferiority not shown"
+    )
+    assert len(S.gee_difference(paired_frame)) == 1  # no margin: one row
+
+
+def test_gee_difference_words_a_clear_difference():
+    rng = np.random.default_rng(5)
+    rows = [
+        dict(
+            participant_id=p, writer=w, correct=float(rng.random() < (0.9 if w == "human" else 0.3))
+        )
+        for p in range(24)
+        for w in ("human", "robot")
+        for _ in range(6)
+    ]
+    row = S.gee_difference(pd.DataFrame(rows)).iloc[0]
+    assert row.reject and row.conclusion.startswith("robot lower than human (p = ")
+    row = S.gee_difference(pd.DataFrame(rows), levels=("robot", "human")).iloc[0]
+    assert row.conclusion.startswith("human higher than robot (p = ")
+
+
+def test_gee_difference_not_estimable_and_fixed_level_cases(paired_frame):
+    one = S.gee_difference(paired_frame[paired_frame.participant_id == "P0"]).iloc[0]
+    assert one.conclusion == "not estimable: needs answers from at least 2 participants"
+    assert one.test == "GEE difference (robot - human)" and one.clusters == 1
+    human = S.gee_difference(paired_frame[paired_frame.writer == "human"]).iloc[0]
+    assert human.conclusion == "not estimable: only one writer level present"
+    ones = S.gee_difference(paired_frame.assign(correct=1.0)).iloc[0]
+    assert ones.conclusion == "not estimable: every answer is 1 (no variation: the robust SE is 0)"
+    assert ones.estimate == 0.0
+    split = paired_frame.assign(correct=(paired_frame.writer == "robot").astype(float))
+    row = S.gee_difference(split).iloc[0]
+    assert row.conclusion == (
+        "not estimable: every robot answer is 1 and every human answer is 0 "
+        "(perfect separation: the robust SE is 0)"
+    )
+    assert row.estimate == 1.0
+    half = paired_frame.assign(
+        correct=np.where(paired_frame.writer == "robot", 1.0, paired_frame.correct)
+    )
+    row = S.gee_difference(half).iloc[0]
+    assert np.isfinite(row.p_value)
+    assert row.method.endswith(
+        "; every robot answer is 1: the robust SE takes that rate as known exactly "
+        "(interval too narrow; prefer the paired tests)"
+    )
+
+
+def test_gee_fit_falls_back_to_the_robust_sandwich_where_bias_reduction_fails():
+    from studies.analysis.stats.gee import _gee_fit
+
+    # one cluster holds every x = 1 answer: its block of (I - H) is singular (statsmodels
+    # raises LinAlgError in the Mancl-DeRouen correction), the plain sandwich still exists
+    y = np.array([1.0, 0.0, 1.0, 0.0, 1.0, 1.0, 1.0])
+    x = np.array([1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    groups = np.array([0, 0, 1, 1, 1, 1, 1])
+    exog = np.column_stack([np.ones(7), x])
+    with pytest.raises(np.linalg.LinAlgError):
+        sm.GEE(
+            y,
+            exog,
+            groups=groups,
+            family=sm.families.Gaussian(),
+            cov_struct=sm.cov_struct.Exchangeable(),
+        ).fit(cov_type="bias_reduced")
+    res, cov, rho, notes = _gee_fit(y, exog, groups, sm.families.Gaussian())
+    assert cov == "robust" and np.isfinite(res.params).all()
+    assert notes == ["fewer than 20 clusters: the robust SE is unreliable"]
+    assert rho == float(np.atleast_1d(res.model.cov_struct.dep_params)[0])
+
+
+def test_a_failed_fit_message_is_one_line_of_at_most_200_characters():
+    from studies.analysis.stats.gee import _message
+
+    assert _message(ValueError("a\n  b\tc")) == "a b c"
+    assert _message(ValueError("x" * 300)) == "x" * 200
