@@ -281,3 +281,37 @@ def test_a_failed_fit_message_is_one_line_of_at_most_200_characters():
 
     assert _message(ValueError("a\n  b\tc")) == "a b c"
     assert _message(ValueError("x" * 300)) == "x" * 200
+
+
+def test_gee_difference_keeps_rows_with_gaps_elsewhere_and_counts_clusters(paired_frame):
+    gappy = paired_frame.assign(note=np.where(np.arange(len(paired_frame)) % 3 == 0, np.nan, 1.0))
+    row = S.gee_difference(gappy).iloc[0]
+    assert row.n == 200 and row.clusters == 20
+    close(row.estimate, S.gee_difference(paired_frame).iloc[0].estimate)
+    empty = S.gee_difference(paired_frame.assign(correct=np.nan)).iloc[0]
+    assert empty.n == 0 and empty.clusters == 0
+    assert empty.conclusion == "not estimable: needs answers from at least 2 participants"
+
+
+def test_gee_difference_with_two_clusters_is_a_test():
+    rows = [
+        dict(participant_id=p, writer=w, correct=c)
+        for p in ("a", "b")
+        for w, cs in (("human", (1, 0, 1, 1)), ("robot", (0, 0, 1, 0)))
+        for c in cs
+    ]
+    row = S.gee_difference(pd.DataFrame(rows)).iloc[0]
+    assert row.clusters == 2 and not row.conclusion.startswith("not estimable")
+    assert "fewer than 20 clusters" in row.method
+
+
+def test_gee_difference_with_a_single_answer_of_one_level_notes_it():
+    rng = np.random.default_rng(3)
+    rows = [
+        dict(participant_id=p, writer="human", correct=float(rng.random() < 0.6))
+        for p in range(10)
+        for _ in range(4)
+    ]
+    rows.append(dict(participant_id=0, writer="robot", correct=1.0))
+    row = S.gee_difference(pd.DataFrame(rows)).iloc[0]
+    assert "every robot answer is 1: the robust SE takes that rate as known exactly" in row.method

@@ -372,3 +372,25 @@ def test_paired_tests_ignore_other_conditions_and_unused_categories(paired_frame
         out.n.iloc[0] == 20
         and out.method.iloc[0] == "scipy ttest_rel; 20 participants with both levels"
     )
+
+
+def test_group_ttest_zero_variance_row_names_the_test_and_the_difference():
+    df, _, _ = _group_frame()
+    halves = df.assign(correct=np.where(df.writer == "robot", 1.0, (df.index % 2).astype(float)))
+    row = S.group_ttest(halves, alpha=0.1).iloc[0]
+    assert row.test == "independent t-test on word rates (robot - human)"
+    assert row.estimate == 0.5 and row.alpha == 0.1
+    assert row.conclusion.startswith("not estimable: every human word rate is 0.5")
+    short = S.group_ttest(df[df.writer == "human"], alpha=0.1).iloc[0]
+    assert short.test == "independent t-test on word rates (robot - human)" and short.alpha == 0.1
+
+
+def test_group_ttest_with_one_constant_group_warns_nothing():
+    import warnings
+
+    df, _, _ = _group_frame()
+    one_flat = df.assign(correct=np.where(df.writer == "robot", 1.0, df.correct))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        row = S.group_ttest(one_flat).iloc[0]
+    assert np.isfinite(row.p_value)
