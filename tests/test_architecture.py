@@ -121,8 +121,6 @@ UNMIRRORED = {
     "studies.analysis.report.formatting": "the report, built by studies.analysis.commands in tests/studies/analysis/test_commands.py",
     "studies.analysis.report.sections": "the report, built by studies.analysis.commands in tests/studies/analysis/test_commands.py",
     "studies.analysis.report.write": "the report, built by studies.analysis.commands in tests/studies/analysis/test_commands.py",
-    "studies.analysis.stats.common": "tested with its package in tests/studies/analysis/test_stats.py",
-    "studies.analysis.stats.nonparametric": "tested with its package in tests/studies/analysis/test_stats.py",
     "studies.bundle": "the study bundle, built and served in tests/e2e/test_study_web.py",
     "studies.program": "the study program, built by tests/studies/test_cli.py",
     "studies.stimuli.json_samples": "sample files, read by tests/studies/stimuli/test_human.py",
