@@ -1,5 +1,6 @@
-"""Kill `prg-train` mid-epoch (SIGKILL), resume with `ckpt_path=last`: the run finishes, and
-MLflow shows one run, FINISHED, with every epoch logged once — real processes, real SQLite."""
+"""Kill `prg-train` mid-epoch (SIGKILL), resume with `ckpt_path=last`: the run finishes, MLflow
+shows one run, FINISHED, with every epoch logged once, and the weights and losses are those of
+an uninterrupted run — real processes, real SQLite."""
 
 import os
 import signal
@@ -87,6 +88,24 @@ def test_killed_mid_epoch_run_resumes_into_one_finished_run(tmp_path, small_data
     assert sorted({(m.step, m.value) for m in epochs}) == [(s, e) for e, s in enumerate(epoch_ends)]
     configs = [a.path for a in client.list_artifacts(run_id, "config")]
     assert configs == [f"config/config-resume-{step}.yaml", "config/config.yaml"]
+
+    # the same training without a stop: the same batches in the same order, the same noise
+    whole = tmp_path / "whole"
+    result = run_cli("prg-train", *_args(whole, small_dataset), timeout=600)
+    assert result.returncode == 0, result.stderr[-3000:]
+    resumed = torch.load(last, weights_only=False)["state_dict"]
+    uninterrupted = torch.load(whole / "checkpoints/prg/cvae-seed0/last.ckpt", weights_only=False)[
+        "state_dict"
+    ]
+    assert resumed.keys() == uninterrupted.keys()
+    different = [k for k in resumed if not torch.equal(resumed[k], uninterrupted[k])]
+    assert not different, f"resumed weights differ from an uninterrupted run's: {different[:5]}"
+    whole_client, (whole_run,) = _runs(whole)
+    for name in ("train/loss", "val/loss"):
+        losses = [m.value for m in client.get_metric_history(run_id, name)]
+        assert losses == [
+            m.value for m in whole_client.get_metric_history(whole_run.info.run_id, name)
+        ], name
 
 
 def test_ckpt_path_last_without_a_checkpoint_is_one_line_exit_2(tmp_path, small_dataset):

@@ -42,6 +42,7 @@ import json
 import logging
 import os
 import time
+import warnings
 from contextlib import AbstractContextManager, ExitStack, nullcontext
 from dataclasses import dataclass
 from pathlib import Path
@@ -377,8 +378,13 @@ def _train(cfg: DictConfig, held: ExitStack) -> TrainResult:
     )
     trainer: L.Trainer = _build(cfg.trainer, "trainer", logger=logger, callbacks=callbacks)
     cpu_start, wall_start = time.process_time(), time.perf_counter()
-    # weights_only: a resumed checkpoint is data, as read_checkpoint already checked it
-    trainer.fit(module, datamodule=datamodule, ckpt_path=ckpt_path, weights_only=True)
+    with warnings.catch_warnings():
+        if trainer.world_size == 1:  # the loader goes on where it stopped, which Lightning
+            # cannot see (LastCheckpoint, ResumableSampler): its warning that it does not
+            # would mislead; under DDP it holds
+            warnings.filterwarnings("ignore", "You're resuming from a checkpoint that ended")
+        # weights_only: a resumed checkpoint is data, as read_checkpoint already checked it
+        trainer.fit(module, datamodule=datamodule, ckpt_path=ckpt_path, weights_only=True)
     # the cost of this fit (a resumed run counts only its own part): CPU time of all threads
     metrics = {k: float(v) for k, v in trainer.callback_metrics.items()}
     metrics["fit_cpu_s"] = time.process_time() - cpu_start

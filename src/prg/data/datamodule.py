@@ -10,7 +10,7 @@ from typing import Any
 import lightning as L
 import numpy as np
 import torch
-from torch.utils.data import DataLoader, Dataset
+from torch.utils.data import DataLoader, Dataset, RandomSampler
 
 from prg.data.store import load_split
 from prg.errors import UsageError
@@ -90,6 +90,37 @@ def check_model_shapes(arrays: dict[str, np.ndarray], path: str | Path) -> None:
         )
 
 
+class ResumableSampler(RandomSampler):
+    """The training shuffle, a :class:`torch.utils.data.RandomSampler` (the same orders, drawn
+    from ``generator``) that a resumed training can put back where it stopped.
+
+    ``epoch_state`` is the generator's state just before the current epoch's order was drawn;
+    :meth:`resume` makes the next epoch draw from a saved one and leave out the samples already
+    trained on, so a training resumed mid-epoch sees the rest of that epoch's batches in the
+    uninterrupted run's order (:class:`prg.training.callbacks.LastCheckpoint`).
+    """
+
+    def __init__(self, data_source, generator: torch.Generator):
+        super().__init__(data_source, generator=generator)
+        self.epoch_state: torch.Tensor | None = None
+        self._resume: tuple[torch.Tensor, int] | None = None
+
+    def resume(self, epoch_state: torch.Tensor, samples_done: int) -> None:
+        """Draw the next order from ``epoch_state`` and skip its first ``samples_done``."""
+        self._resume = (epoch_state, samples_done)
+
+    def __iter__(self):
+        skip = 0
+        if self._resume is not None:
+            state, skip = self._resume
+            self.generator.set_state(state)
+            self._resume = None
+        self.epoch_state = self.generator.get_state()
+        for i, index in enumerate(super().__iter__()):
+            if i >= skip:
+                yield index
+
+
 class PRGDataModule(L.LightningDataModule):
     """Train/val/test loaders over ``<data_dir>/prepared/<name>/``.
 
@@ -141,6 +172,9 @@ class PRGDataModule(L.LightningDataModule):
         self.seed = seed
         self.datasets: dict[str, ModalityDataset] = {}
         self.train_letters: dict[str, np.ndarray] | None = None
+        self.train_sampler: ResumableSampler | None = None  # the training loader's, once made
+        # set by a resumed training before its loader is made (prg.training.callbacks)
+        self.resume_order: dict[str, Any] | None = None
 
     @property
     def manifest(self) -> dict[str, Any]:
@@ -169,15 +203,23 @@ class PRGDataModule(L.LightningDataModule):
     def _loader(self, split: str, shuffle: bool) -> DataLoader:
         if split not in self.datasets:
             self.setup(None)
-        generator = torch.Generator().manual_seed(self.seed) if shuffle else None
+        dataset = self.datasets[split]
+        sampler = None
+        if shuffle:  # one generator per training: each epoch's order follows from the seed
+            generator = torch.Generator().manual_seed(self.seed)
+            sampler = self.train_sampler = ResumableSampler(dataset, generator)
+            if self.resume_order is not None:  # a resumed training: where its order stopped
+                generator.set_state(self.resume_order["generator"])
+                if self.resume_order["samples_done"]:
+                    sampler.resume(self.resume_order["epoch"], self.resume_order["samples_done"])
         return DataLoader(
-            self.datasets[split],
+            dataset,
             batch_size=self.batch_size if split == "train" else self.eval_batch_size,
-            shuffle=shuffle,
+            sampler=sampler,
             num_workers=self.num_workers,
             pin_memory=self.pin_memory,
             collate_fn=_identity,
-            generator=generator,
+            generator=sampler.generator if sampler else None,
             persistent_workers=self.num_workers > 0,
         )
 

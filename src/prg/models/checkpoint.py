@@ -28,7 +28,14 @@ from prg.models.base import MultimodalVAE
 #: matches (it hashes the resolved config, paths included). An exported ``model.ckpt`` leaves
 #: them out (:func:`without_run_facts`), so the same training gives the same file wherever it
 #: ran and whatever run logged it; its run id is in the ``metrics.json`` beside it.
-RUN_FACTS = ("mlflow_run_id", "mlflow_tracking_uri", "callbacks", "prg_job")
+RUN_FACTS = (
+    "mlflow_run_id",
+    "mlflow_tracking_uri",
+    "callbacks",
+    "prg_job",
+    "prg_random_state",  # where this run goes on (LastCheckpoint), not the model
+    "prg_training_order",
+)
 
 
 def without_run_facts(ckpt: dict[str, Any]) -> dict[str, Any]:

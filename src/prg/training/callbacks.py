@@ -50,11 +50,15 @@ class LastCheckpoint(Checkpoint):
     The file is written next to its final name and moved into place, so a kill during a write
     leaves the previous ``last.ckpt`` intact. The per-epoch loss sums the module has accumulated
     so far travel in the checkpoint, so the interrupted epoch's ``train/*`` averages all of its
-    batches. The training loader is not resumable, so the remaining batches of an interrupted
-    epoch come from a fresh shuffle (Lightning warns about it) and a resumed run's losses are
-    close to, not equal to, an uninterrupted run's. (Lightning's ``ModelCheckpoint(save_last=True)``
-    is not used for this: since Lightning 2.6 it refreshes ``last.ckpt`` only when a top-k
-    checkpoint is saved, that is when the monitored loss improves.)
+    batches. So do the random state a training draws its noise from (torch's global generators,
+    put back before the first batch after the resume) and the training shuffle's
+    (:class:`prg.data.datamodule.ResumableSampler`: the interrupted epoch goes on in its own
+    order, without the batches already trained on), so on one process a resumed run trains on
+    what an uninterrupted one does and ends with the same weights. (Under DDP Lightning shuffles
+    with its own sampler, seeded per epoch: a resume at an epoch's end keeps the order, one
+    mid-epoch does not.) Lightning's ``ModelCheckpoint(save_last=True)`` is not used for this:
+    since Lightning 2.6 it refreshes ``last.ckpt`` only when a top-k checkpoint is saved, that
+    is when the monitored loss improves.
     """
 
     FILENAME = "last.ckpt"
@@ -67,6 +71,8 @@ class LastCheckpoint(Checkpoint):
         self.path = Path(dirpath) / self.FILENAME
         self.every_n_train_steps = every_n_train_steps
         self._saved_step = -1
+        self._batches_done = 0  # of the current epoch, at the save
+        self._random_state: dict[str, Any] | None = None  # to put back at the next batch
 
     def save(self, trainer: L.Trainer) -> None:
         if trainer.fast_dev_run:  # a smoke test of the loop, nothing to resume (as ModelCheckpoint)
@@ -83,11 +89,18 @@ class LastCheckpoint(Checkpoint):
     def on_train_batch_end(self, trainer, pl_module, outputs, batch, batch_idx) -> None:
         every = self.every_n_train_steps
         last_batch = trainer.fit_loop.epoch_loop.batch_progress.is_last_batch
+        self._batches_done = batch_idx + 1
         if every and trainer.global_step % every == 0 and not last_batch:
             self.save(trainer)  # at the last batch, the epoch-end save follows validation
 
     def on_train_epoch_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
+        self._batches_done = 0  # the next epoch starts afresh
         self.save(trainer)
+
+    def on_train_batch_start(self, trainer, pl_module, batch, batch_idx) -> None:
+        if self._random_state is not None:  # the first batch after a resume
+            set_random_state(self._random_state)
+            self._random_state = None
 
     def on_train_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
         if trainer.global_step != self._saved_step:
@@ -99,6 +112,14 @@ class LastCheckpoint(Checkpoint):
             "sums": getattr(pl_module, "_sums", {}),
             "counts": getattr(pl_module, "_counts", {}),
         }
+        checkpoint["prg_random_state"] = random_state()
+        sampler = getattr(trainer.datamodule, "train_sampler", None)
+        if sampler is not None:
+            checkpoint["prg_training_order"] = {
+                "generator": sampler.generator.get_state(),
+                "epoch": sampler.epoch_state,
+                "samples_done": self._batches_done * trainer.train_dataloader.batch_size,
+            }
 
     def on_load_checkpoint(self, trainer, pl_module, checkpoint: dict[str, Any]) -> None:
         state = checkpoint.get("prg_epoch_sums")
@@ -108,6 +129,28 @@ class LastCheckpoint(Checkpoint):
                 for split, terms in state["sums"].items()
             }
             pl_module._counts = dict(state["counts"])
+        self._random_state = checkpoint.get("prg_random_state")
+        order = checkpoint.get("prg_training_order")
+        datamodule = getattr(trainer, "datamodule", None)
+        if order is not None and hasattr(datamodule, "resume_order") and trainer.world_size == 1:
+            datamodule.resume_order = order
+
+
+def random_state() -> dict[str, Any]:
+    """The state of torch's global generators (CPU, and CUDA where there is one): a training
+    draws its noise (reparameterisation, dropout, image shifts) from them, never from numpy's
+    or Python's."""
+    state = {"torch": torch.get_rng_state()}
+    if torch.cuda.is_available():
+        state["cuda"] = torch.cuda.get_rng_state_all()
+    return state
+
+
+def set_random_state(state: dict[str, Any]) -> None:
+    """Put back what :func:`random_state` returned."""
+    torch.set_rng_state(state["torch"])
+    if "cuda" in state and torch.cuda.is_available():
+        torch.cuda.set_rng_state_all(state["cuda"])
 
 
 class JobIdentity(L.Callback):

@@ -71,3 +71,53 @@ def test_a_dataset_of_other_shapes_is_refused_naming_the_prepare_options():
     with pytest.raises(UsageError, match=r"n_points=\(4,\) and data.image.size=\(28, 30\)"):
         check_model_shapes(arrays, "x")
     check_model_shapes({"label": arrays["label"]}, "x")  # labels have no shape option
+
+
+def _orders(loader, epochs, batches=None):
+    out = []
+    for _ in range(epochs):
+        out.append([b.tolist() for _, b in zip(range(batches or 10**9), loader)])
+    return out
+
+
+def test_the_training_order_is_torchs_random_sampler_epoch_after_epoch():
+    from torch.utils.data import DataLoader
+
+    from prg.data.datamodule import ResumableSampler
+
+    data = list(range(300))
+    plain = DataLoader(
+        data, batch_size=32, shuffle=True, generator=torch.Generator().manual_seed(4)
+    )
+    sampler = ResumableSampler(data, torch.Generator().manual_seed(4))
+    ours = DataLoader(data, batch_size=32, sampler=sampler, generator=sampler.generator)
+    assert _orders(ours, 3) == _orders(plain, 3)  # whole epochs
+    plain = DataLoader(
+        data, batch_size=32, shuffle=True, generator=torch.Generator().manual_seed(4)
+    )
+    sampler = ResumableSampler(data, torch.Generator().manual_seed(4))
+    ours = DataLoader(data, batch_size=32, sampler=sampler, generator=sampler.generator)
+    assert _orders(ours, 3, 4) == _orders(plain, 3, 4)  # epochs cut short (limit_train_batches)
+
+
+def test_a_resumed_order_goes_on_where_it_stopped():
+    from torch.utils.data import DataLoader
+
+    from prg.data.datamodule import ResumableSampler
+
+    data = list(range(300))
+    sampler = ResumableSampler(data, torch.Generator().manual_seed(9))
+    loader = DataLoader(data, batch_size=32, sampler=sampler, generator=sampler.generator)
+    first = _orders(loader, 1)[0]
+    it = iter(loader)
+    second_start = [next(it).tolist() for _ in range(3)]  # 3 batches of epoch 2, then a stop
+    epoch_state, now = sampler.epoch_state, sampler.generator.get_state()
+    rest_of_second = [b.tolist() for b in it]
+    third = _orders(loader, 1)[0]
+
+    again = ResumableSampler(data, torch.Generator().manual_seed(123))  # another process
+    again.generator.set_state(now)
+    again.resume(epoch_state, 3 * 32)
+    loader = DataLoader(data, batch_size=32, sampler=again, generator=again.generator)
+    assert _orders(loader, 2) == [rest_of_second, third]
+    assert first != second_start + rest_of_second  # a new order each epoch
