@@ -50,3 +50,32 @@ def paired_frame() -> pd.DataFrame:
                 )
             )
     return pd.DataFrame(rows)
+
+
+def two_writer_answers(participants: int, trials: int, human: float, robot: float, seed: int):
+    """Every participant answers ``trials`` times per writer, right with probability ``human``
+    for the human's words and ``robot`` for the robot's: a clear difference between writers."""
+    rng = np.random.default_rng(seed)
+    rates = {"human": human, "robot": robot}
+    rows = [
+        dict(participant_id=p, writer=w, correct=float(rng.random() < rates[w]))
+        for p in range(participants)
+        for w in ("human", "robot")
+        for _ in range(trials)
+    ]
+    return pd.DataFrame(rows)
+
+
+def gee_difference_reference(frame: pd.DataFrame, level: str):
+    """statsmodels' exchangeable Gaussian GEE of ``correct`` on [1, writer == level], clustered
+    by participant, with the bias-reduced sandwich: what ``gee_difference`` should report."""
+    import statsmodels.api as sm
+
+    x = (frame.writer == level).astype(float)
+    return sm.GEE(
+        frame["correct"],
+        np.column_stack([np.ones(len(x)), x]),
+        groups=pd.factorize(frame.participant_id)[0],
+        family=sm.families.Gaussian(),
+        cov_struct=sm.cov_struct.Exchangeable(),
+    ).fit(cov_type="bias_reduced")

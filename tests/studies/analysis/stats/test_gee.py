@@ -11,7 +11,14 @@ import statsmodels.api as sm
 from scipy import stats
 
 from studies.analysis import stats as S
-from tests.helpers.study_analysis import binary_frame, close, fields, paired_frame  # noqa: F401 (fixtures)
+from tests.helpers.study_analysis import (  # noqa: F401 (fixtures)
+    binary_frame,
+    close,
+    fields,
+    gee_difference_reference,
+    paired_frame,
+    two_writer_answers,
+)
 
 
 def test_gee_tost_rejects_exactly_when_its_90_percent_ci_is_inside_the_band():
@@ -38,14 +45,7 @@ def test_gee_difference_is_the_difference_in_rates_with_cluster_robust_se(paired
     rows = S.gee_difference(paired_frame, "correct", "writer", "participant_id", margin=0.1)
     means = paired_frame.groupby("writer")["correct"].mean()
     assert rows.iloc[0].estimate == pytest.approx(means["robot"] - means["human"])
-    x = (paired_frame.writer == "robot").astype(float)
-    ref = sm.GEE(
-        paired_frame["correct"],
-        np.column_stack([np.ones(len(x)), x]),
-        groups=pd.factorize(paired_frame.participant_id)[0],
-        family=sm.families.Gaussian(),
-        cov_struct=sm.cov_struct.Exchangeable(),
-    ).fit(cov_type="bias_reduced")
+    ref = gee_difference_reference(paired_frame, "robot")
     d, se = ref.params.iloc[1], ref.bse.iloc[1]
     q, q2 = stats.norm.ppf(0.975), stats.norm.ppf(0.95)
     close(
@@ -174,14 +174,7 @@ def test_gee_difference_at_another_level_with_swapped_levels_and_extra_condition
     extra = paired_frame.iloc[:30].assign(writer="other")
     df = pd.concat([paired_frame, extra])
     rows = S.gee_difference(df, levels=("robot", "human"), margin=0.15, alpha=0.1)
-    x = (paired_frame.writer == "human").astype(float)
-    ref = sm.GEE(
-        paired_frame["correct"],
-        np.column_stack([np.ones(len(x)), x]),
-        groups=pd.factorize(paired_frame.participant_id)[0],
-        family=sm.families.Gaussian(),
-        cov_struct=sm.cov_struct.Exchangeable(),
-    ).fit(cov_type="bias_reduced")
+    ref = gee_difference_reference(paired_frame, "human")
     d, se = ref.params.iloc[1], ref.bse.iloc[1]
     q, q2 = stats.norm.ppf(0.95), stats.norm.ppf(0.9)
     close(fields(rows.iloc[0], "estimate", "ci_low", "ci_high"), [d, d - q * se, d + q * se], 1e-7)
@@ -211,18 +204,10 @@ def test_gee_difference_at_another_level_with_swapped_levels_and_extra_condition
 
 
 def test_gee_difference_words_a_clear_difference():
-    rng = np.random.default_rng(5)
-    rows = [
-        dict(
-            participant_id=p, writer=w, correct=float(rng.random() < (0.9 if w == "human" else 0.3))
-        )
-        for p in range(24)
-        for w in ("human", "robot")
-        for _ in range(6)
-    ]
-    row = S.gee_difference(pd.DataFrame(rows)).iloc[0]
+    answers = two_writer_answers(24, 6, human=0.9, robot=0.3, seed=5)
+    row = S.gee_difference(answers).iloc[0]
     assert row.reject and row.conclusion.startswith("robot lower than human (p = ")
-    row = S.gee_difference(pd.DataFrame(rows), levels=("robot", "human")).iloc[0]
+    row = S.gee_difference(answers, levels=("robot", "human")).iloc[0]
     assert row.conclusion.startswith("human higher than robot (p = ")
 
 

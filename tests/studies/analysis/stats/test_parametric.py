@@ -14,7 +14,12 @@ from studies.analysis import stats as S
 from studies.analysis.paper import (
     paper_turing_frame,
 )
-from tests.helpers.study_analysis import close, fields, paired_frame  # noqa: F401 (fixtures)
+from tests.helpers.study_analysis import (  # noqa: F401 (fixtures)
+    close,
+    fields,
+    paired_frame,
+    two_writer_answers,
+)
 
 
 def test_one_sample_ttest_on_rows_and_on_cluster_means_matches_scipy():
@@ -279,18 +284,10 @@ def test_paired_tests_words_each_conclusion(paired_frame):
         else "non-inferiority not shown"
     )
     assert ni.conclusion.startswith(want + " (p = ")
-    rng = np.random.default_rng(0)
-    rows = [
-        dict(
-            participant_id=p, writer=w, correct=float(rng.random() < (0.9 if w == "human" else 0.2))
-        )
-        for p in range(12)
-        for w in ("human", "robot")
-        for _ in range(10)
-    ]
-    lower = S.paired_tests(pd.DataFrame(rows)).iloc[0]
+    answers = two_writer_answers(12, 10, human=0.9, robot=0.2, seed=0)
+    lower = S.paired_tests(answers).iloc[0]
     assert lower.reject and lower.conclusion.startswith("robot lower than human (p = ")
-    higher = S.paired_tests(pd.DataFrame(rows), levels=("robot", "human")).iloc[0]
+    higher = S.paired_tests(answers, levels=("robot", "human")).iloc[0]
     assert higher.conclusion.startswith("human higher than robot (p = ")
 
 
