@@ -49,11 +49,7 @@ def _gee_fit(y, exog, groups, family, offset=None):
         notes.append("GEE did not fully converge")
     if groups.max() + 1 < 20:
         notes.append("fewer than 20 clusters: the robust SE is unreliable")
-    rho = (
-        float(np.atleast_1d(res.model.cov_struct.dep_params)[0])
-        if res.model.cov_struct.dep_params is not None
-        else np.nan
-    )
+    rho = float(np.atleast_1d(res.model.cov_struct.dep_params)[0])  # Exchangeable: a float
     return res, cov, rho, notes
 
 

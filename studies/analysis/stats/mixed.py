@@ -138,22 +138,18 @@ def mixed_logit(
             )
         )
     for name, m, s in zip(model.vcp_names, vc_mean, vc_sd):
-        # vcp are log SDs: report the SD and its interval
+        # vcp are log SDs: report the SD and its interval (no SD of an SD, no rate: NaN)
         rows.append(
             dict(
                 term=f"sd({name})",
                 type="random-effect SD (logit)",
                 post_mean=float(np.exp(m)),
-                post_sd=np.nan,
                 ci_low=float(np.exp(m - q * s)),
                 ci_high=float(np.exp(m + q * s)),
-                rate=np.nan,
-                rate_low=np.nan,
-                rate_high=np.nan,
                 status=status,
             )
         )
-    return pd.DataFrame(rows)[list(MIXED_COLUMNS)]
+    return pd.DataFrame(rows, columns=list(MIXED_COLUMNS))
 
 
 def _separated_cell(frame: pd.DataFrame, exog: pd.DataFrame, fixed: str) -> str:

@@ -69,7 +69,7 @@ def one_sample_ttest(
     null = {"greater": "<=", "less": ">=", "two-sided": "="}[alternative]
     name = f"one-sample t-test vs {popmean:g} on {unit}"
     common = dict(null_hypothesis=f"mean {null} {popmean:g}", n=n, clusters=n_clusters, alpha=alpha)
-    why = no_spread(x, f"every {unit[:-1] if unit.endswith('s') else unit}")
+    why = no_spread(x, f"every {unit[:-1]}")  # "ratings" / "participant means"
     if why:
         estimate = float(np.mean(x)) if n else np.nan
         return not_estimable(

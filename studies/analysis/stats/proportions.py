@@ -141,7 +141,7 @@ def rates_by(
 
     keys = [by] if isinstance(by, str) else list(by)
     frame = df.assign(_y=values(df, outcome)).dropna(subset=["_y"])
-    g = frame.groupby(keys, sort=True)["_y"]
+    g = frame.groupby(keys)["_y"]  # levels in sorted order
     out = pd.DataFrame({"n": g.size(), "k": g.sum()}).reset_index()
     out["k"] = out["k"].astype(int)
     out["rate"] = out["k"] / out["n"]
@@ -150,5 +150,5 @@ def rates_by(
     if chance is not None:
         p = [stats.binomtest(int(k), int(n), chance).pvalue for k, n in zip(out["k"], out["n"])]
         out["p_vs_chance"] = p
-        out["p_holm"] = multipletests(p, method="holm")[1] if len(p) else []
+        out["p_holm"] = multipletests(p, method="holm")[1]
     return out

@@ -44,7 +44,7 @@ def icc_oneway(df: pd.DataFrame, value: str, cluster: str = "participant_id") ->
                 clusters=k,
                 n=int(n),
                 mean_cluster_size=m,
-                design_effect=1 + (m - 1) * max(icc, 0.0) if np.isfinite(icc) else np.nan,
+                design_effect=1 + (m - 1) * np.maximum(icc, 0.0),  # NaN stays NaN
             )
         ]
     )

@@ -128,3 +128,9 @@ def test_no_spread_names_too_few_values_and_zero_variance():
         == "every rating is 4 (zero variance: no t-test or interval)"
     )
     assert C.no_spread(np.array([4.0, 5.0]), "every rating") == ""
+
+
+def test_constant_at_its_tolerance_and_on_booleans():
+    assert C.constant(np.array([0.0, 1e-12])) is True  # exactly at the floor: no spread
+    assert C.constant(np.array([0.0, 1.5e-12])) is False  # the floor is 1e-12, not 2e-12
+    assert C.constant([True, True]) is True and C.constant([True, False]) is False

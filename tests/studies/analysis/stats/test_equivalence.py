@@ -155,3 +155,24 @@ def test_margin_candidates_are_the_wald_half_width_the_se_and_the_word_sd():
     one_word = S.margin_candidates(df.assign(word="a"), "y")
     assert "the SD across words" not in one_word and "the standard error" in one_word
     assert S.margin_candidates(pd.DataFrame({"word": ["a"], "y": [1]}), "y") == {}
+
+
+def test_tost_conclusion_keeps_a_null_whose_p_is_exactly_alpha():
+    from studies.analysis.stats.equivalence import tost_conclusion
+
+    text = tost_conclusion("rate", 0.05, 0.01, 0.05, 0.15, 0.25, 0.05)
+    assert text == "equivalence not shown: null 'rate >= 0.25' (p = 0.050) not rejected"
+    low = tost_conclusion("rate", 0.05, 0.05, 0.01, 0.15, 0.25, 0.05)
+    assert low == "equivalence not shown: null 'rate <= 0.15' (p = 0.050) not rejected"
+
+
+def test_binomial_tost_row_counts_its_trials():
+    row = S.binomial_tost(binary_frame(40, 200), "y").iloc[0]
+    assert row.n == 200 and row.estimate == 0.2 and row.statistic == 40
+
+
+def test_margin_candidates_from_two_answers_and_two_words():
+    df = pd.DataFrame({"word": ["a", "b"], "y": [1.0, 0.0]})
+    out = S.margin_candidates(df, "y")
+    close(out["the standard error"], np.sqrt(0.25 / 2))
+    close(out["the SD across words"], np.std([1.0, 0.0], ddof=1))

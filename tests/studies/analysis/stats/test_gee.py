@@ -300,3 +300,100 @@ def test_gee_difference_with_a_single_answer_of_one_level_notes_it():
     rows.append(dict(participant_id=0, writer="robot", correct=1.0))
     row = S.gee_difference(pd.DataFrame(rows)).iloc[0]
     assert "every robot answer is 1: the robust SE takes that rate as known exactly" in row.method
+
+
+# --------------------------------------------------------------------------- every field, every edge
+
+
+def _stopped_early(monkeypatch):
+    """GEE's real fit stopped after one iteration short of its (unreachable) tolerance:
+    statsmodels warns "Iteration limit reached prior to convergence", as it does for a fit that
+    does not converge."""
+    fit = sm.GEE.fit
+    monkeypatch.setattr(sm.GEE, "fit", lambda self, **kw: fit(self, maxiter=1, ctol=1e-300, **kw))
+
+
+def test_gee_rate_says_when_the_fit_did_not_converge_beside_its_other_notes(monkeypatch):
+    _stopped_early(monkeypatch)
+    row = S.gee_rate(binary_frame(30, 100, participants=10), "y").iloc[0]
+    assert row.method.endswith(
+        " SE, 10 clusters; GEE did not fully converge; "
+        "fewer than 20 clusters: the robust SE is unreliable"
+    )
+
+
+def test_gee_other_warnings_add_no_convergence_note(monkeypatch):
+    import warnings
+
+    fit = sm.GEE.fit
+
+    def noisy(self, **kw):
+        warnings.warn("divide by zero encountered", RuntimeWarning, stacklevel=2)
+        return fit(self, **kw)
+
+    monkeypatch.setattr(sm.GEE, "fit", noisy)
+    row = S.gee_rate(binary_frame(60, 250, participants=25), "y").iloc[0]
+    assert "converge" not in row.method
+
+
+def test_gee_rate_with_two_clusters_is_fitted():
+    df = pd.DataFrame(
+        {"participant_id": [0] * 6 + [1] * 6, "y": [1, 0, 0, 1, 0, 0, 1, 1, 0, 0, 0, 1]}
+    )
+    rows = S.gee_rate(df, "y", margin=0.05)
+    assert rows.clusters.tolist() == [2, 2] and rows.p_value.notna().all()
+
+
+def test_gee_rate_not_estimable_without_margin_is_one_row():
+    rows = S.gee_rate(binary_frame(0, 100), "y")
+    assert rows.test.tolist() == ["GEE rate vs chance"]
+
+
+class _Fit:
+    """A GEE result with chosen estimates, for the guards a real fit reaches only on
+    degenerate data (a diverged or singular fit)."""
+
+    def __init__(self, params, bse):
+        self.params, self.bse = np.asarray(params, float), np.asarray(bse, float)
+
+
+@pytest.mark.parametrize("b, se", [(np.nan, 0.3), (0.2, np.nan), (0.2, 0.0), (0.2, -0.1)])
+def test_gee_rate_refuses_a_non_finite_or_zero_standard_error(monkeypatch, b, se):
+    from studies.analysis.stats import gee
+
+    monkeypatch.setattr(gee, "_gee_fit", lambda *a: (_Fit([b], [se]), "robust", 0.1, []))
+    rows = S.gee_rate(binary_frame(30, 100), "y", margin=0.05)
+    assert (rows.conclusion == "not estimable: no finite estimate").all()
+
+
+@pytest.mark.parametrize("se", [np.nan, np.inf, 0.0])
+def test_gee_difference_refuses_a_non_finite_or_zero_standard_error(monkeypatch, paired_frame, se):
+    from studies.analysis.stats import gee
+
+    monkeypatch.setattr(
+        gee, "_gee_fit", lambda *a: (_Fit([0.5, 0.1], [0.1, se]), "robust", 0.1, [])
+    )
+    row = S.gee_difference(paired_frame).iloc[0]
+    assert row.conclusion == "not estimable: no finite standard error (all answers identical?)"
+
+
+def test_gee_tost_and_non_inferiority_rows_carry_the_statistic_method_and_wording(paired_frame):
+    rows = S.gee_difference(paired_frame, margin=0.1)
+    ref = gee_difference_reference(paired_frame, "robot")
+    d, se = ref.params.iloc[1], ref.bse.iloc[1]
+    close(rows.statistic, [d / se, d / se, (d + 0.1) / se], 1e-7)
+    assert rows.method.nunique() == 1 and rows.method.iloc[0].startswith("GEE identity link")
+    tost = rows.iloc[1]
+    p1, p2 = stats.norm.sf((d + 0.1) / se), stats.norm.cdf((d - 0.1) / se)
+    if max(p1, p2) < 0.05:
+        want = "equivalent: difference within (-0.1, 0.1) (p = "
+    else:
+        want = "equivalence not shown: null '"
+        want += "difference <= -0.1'" if p1 >= 0.05 else "difference >= 0.1'"
+    assert tost.conclusion.startswith(want), tost.conclusion
+
+    rate = S.gee_rate(binary_frame(120, 600, 30), "y", margin=0.05)
+    close(rate.statistic, [rate.statistic.iloc[0]] * 2)
+    assert np.isfinite(rate.statistic.iloc[1])
+    assert rate.method.nunique() == 1 and rate.method.iloc[0].startswith("GEE logit")
+    assert rate.conclusion.iloc[1].startswith("equivalent: rate within (0.15, 0.25) (p = ")

@@ -152,3 +152,114 @@ def test_separated_cell_names_the_constant_cell_or_nothing():
     ones = df.assign(_y=1.0)
     plain = dmatrix("1", ones, return_type="dataframe")
     assert _separated_cell(ones, plain, "1") == "every answer is 1"
+
+
+# --------------------------------------------------------------------------- edges of the fit
+
+
+def test_mixed_logit_default_level_cap_is_600_participants_and_words():
+    # 591 participants + 10 words = 601 levels: skipped by default, before any fit
+    rng = np.random.default_rng(3)
+    df = pd.DataFrame(
+        {
+            "participant_id": np.arange(1182) // 2,
+            "word": np.arange(1182) % 10,
+            "chose_robot": (rng.random(1182) < 0.3).astype(float),
+        }
+    )
+    row = S.mixed_logit(df).iloc[0]
+    assert row.status.startswith("skipped: 601 participants and words")
+    assert "(max_levels 600)" in row.status
+
+
+def test_mixed_logit_keeps_rows_whose_other_columns_are_missing():
+    df = _crossed().assign(note=np.nan)  # a free-text column nobody filled in
+    out = S.mixed_logit(df, "y", "pid", "item").set_index("term")
+    ref = S.mixed_logit(df.drop(columns="note"), "y", "pid", "item").set_index("term")
+    np.testing.assert_allclose(out.post_mean, ref.post_mean, **VB)
+
+
+def test_mixed_logit_failure_message_is_one_line_of_at_most_200_characters(monkeypatch):
+    from statsmodels.genmod.bayes_mixed_glm import BinomialBayesMixedGLM
+
+    long = "singular\nmatrix " + "x" * 300
+
+    def boom(self, *a, **k):
+        raise np.linalg.LinAlgError(long)
+
+    monkeypatch.setattr(BinomialBayesMixedGLM, "fit_vb", boom)
+    status = S.mixed_logit(_crossed(), "y", "pid", "item").status.iloc[0]
+    assert status == "failed: " + " ".join(f"LinAlgError: {long}".split())[:200]
+
+
+def test_mixed_logit_says_when_the_optimiser_did_not_converge(monkeypatch):
+    from statsmodels.genmod.bayes_mixed_glm import BinomialBayesMixedGLM
+
+    fit_vb = BinomialBayesMixedGLM.fit_vb
+    # a real fit stopped after one step: statsmodels warns "VB fitting did not converge"
+    monkeypatch.setattr(
+        BinomialBayesMixedGLM, "fit_vb", lambda self: fit_vb(self, minim_opts={"maxiter": 1})
+    )
+    out = S.mixed_logit(_crossed(), "y", "pid", "item")
+    warned = "converged with warnings (optimizer reported non-convergence); treat with caution"
+    assert (out.status == warned).all()
+
+
+def test_mixed_logit_other_warnings_leave_the_status_ok(monkeypatch):
+    import warnings
+
+    from statsmodels.genmod.bayes_mixed_glm import BinomialBayesMixedGLM
+
+    fit_vb = BinomialBayesMixedGLM.fit_vb
+
+    def noisy(self):
+        warnings.warn("overflow encountered in exp", RuntimeWarning, stacklevel=2)
+        return fit_vb(self)
+
+    monkeypatch.setattr(BinomialBayesMixedGLM, "fit_vb", noisy)
+    out = S.mixed_logit(_crossed(), "y", "pid", "item")
+    assert out.status.str.startswith("ok (variational Bayes").all()
+
+
+@pytest.mark.parametrize("broken", ["fe_mean", "fe_sd"])
+def test_mixed_logit_refuses_a_non_finite_posterior(monkeypatch, broken):
+    from statsmodels.genmod.bayes_mixed_glm import BinomialBayesMixedGLM
+
+    fit_vb = BinomialBayesMixedGLM.fit_vb
+
+    def diverged(self):
+        res = fit_vb(self)
+        setattr(res, broken, np.full_like(np.asarray(getattr(res, broken)), np.nan))
+        return res
+
+    monkeypatch.setattr(BinomialBayesMixedGLM, "fit_vb", diverged)
+    out = S.mixed_logit(_crossed(), "y", "pid", "item")
+    assert out.status.tolist() == ["failed: non-finite posterior"]
+
+
+def test_mixed_logit_reads_the_first_rows_by_position_whatever_the_index():
+    df = _crossed(writer=True)
+    df.index = np.r_[np.arange(len(df) - 1), 0]  # a duplicated label, as after pd.concat
+    split = df.assign(y=(df.writer == "robot").astype(float))
+    sep = S.mixed_logit(split, "y", "pid", "item", fixed="writer").status.iloc[0]
+    assert sep.startswith("failed: separation: every human answer is 0")
+
+
+def test_separated_cell_names_the_first_constant_cell_in_the_data_and_every_named_column():
+    from patsy import dmatrix
+
+    from studies.analysis.stats.mixed import _separated_cell
+
+    df = _crossed(writer=True).iloc[1:].reset_index(drop=True)  # the data start with a robot row
+    df = df.assign(_y=(df.writer == "robot").astype(float))  # both cells constant
+    design = dmatrix("writer", df, return_type="dataframe")
+    assert _separated_cell(df, design, "writer") == "every robot answer is 1"
+    # two factors named in the formula: both named, space-separated
+    df["hand"] = "left"
+    two = dmatrix("writer + hand", df, return_type="dataframe")
+    assert _separated_cell(df, two, "writer + hand") == "every robot left answer is 1"
+    # a cell of one row is enough, and a column ending in _y is named like any other
+    one = pd.DataFrame({"writer_y": ["a", "b", "b", "a", "b"], "_y": [1.0, 0.0, 1.0, 0.0, 1.0]})
+    one.loc[4, "writer_y"] = "c"
+    design = dmatrix("writer_y", one, return_type="dataframe")
+    assert _separated_cell(one, design, "writer_y") == "every c answer is 1"

@@ -63,3 +63,9 @@ def test_signed_rank_when_every_mean_is_the_centre_is_not_estimable():
     assert one.conclusion.startswith("not estimable") and one.n == 1
     single = S.signed_rank_test(pd.DataFrame({"participant_id": ["a"], "confidence": [4]})).iloc[0]
     assert np.isfinite(single.p_value) and single.n == 1  # one nonzero difference is a test
+
+
+def test_signed_rank_not_estimable_row_names_its_test():
+    flat = pd.DataFrame({"participant_id": list("aabb"), "confidence": [2, 4, 3, 3]})
+    row = S.signed_rank_test(flat).iloc[0]
+    assert row.test == "Wilcoxon signed-rank vs 3 on participant means"

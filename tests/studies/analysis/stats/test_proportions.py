@@ -161,3 +161,14 @@ def test_rates_by_several_keys_with_tests_against_chance_and_holm():
     plain = S.rates_by(pd.DataFrame(rows), "y", "word")
     assert "p_vs_chance" not in plain and plain.k.tolist() == [6, 2]
     assert (plain.ci_level == 0.95).all()
+
+
+def test_rates_by_sorts_levels_keeps_other_missing_columns_and_handles_no_rows():
+    df = pd.DataFrame(
+        {"word": ["cat", "bell", "cat", "apple", "bell"], "y": [1, 0, 0, 1, 1], "note": np.nan}
+    )
+    out = S.rates_by(df, "y", "word", chance=0.5)
+    assert out.word.tolist() == ["apple", "bell", "cat"]  # sorted, not first-seen
+    assert out.n.tolist() == [1, 2, 2] and out.k.tolist() == [1, 1, 1]
+    empty = S.rates_by(df.assign(y=np.nan), "y", "word", chance=0.5)
+    assert len(empty) == 0 and {"p_vs_chance", "p_holm"} <= set(empty.columns)

@@ -59,3 +59,23 @@ def test_icc_below_zero_gives_design_effect_one_and_degenerate_cases_nan():
     assert np.isnan(flat.icc)  # 0 / 0: no variance at all
     empty = S.icc_oneway(pd.DataFrame({"g": [0], "v": [None]}), "v", "g").iloc[0]
     assert empty.clusters == 0 and np.isnan(empty.mean_cluster_size)
+
+
+def test_icc_needs_one_more_row_than_clusters_and_ignores_other_missing_columns():
+    # sizes 2, 1, 1: n - k = 1 degree of freedom within, enough for MSW
+    df = pd.DataFrame({"g": ["a", "a", "b", "c"], "v": [1.0, 3.0, 5.0, 9.0], "note": np.nan})
+    out = S.icc_oneway(df, "v", "g").iloc[0]
+    grand = 4.5
+    ssb = 2 * (2 - grand) ** 2 + (5 - grand) ** 2 + (9 - grand) ** 2
+    msb, msw = ssb / 2, 2.0 / 1
+    n0 = (4 - (4 + 1 + 1) / 4) / 2
+    assert out.icc == pytest.approx((msb - msw) / (msb + (n0 - 1) * msw), rel=1e-12)
+    assert out.n == 4
+
+
+def test_icc_is_scale_free_small_values_included():
+    df = pd.DataFrame({"g": np.repeat([0, 1, 2], 3), "v": [1, 2, 3, 4, 5, 6, 8, 9, 7]})
+    tiny = df.assign(v=df.v * 1e-3)  # every mean square below 1
+    big, small = S.icc_oneway(df, "v", "g").iloc[0], S.icc_oneway(tiny, "v", "g").iloc[0]
+    assert small.icc == pytest.approx(big.icc, rel=1e-9)
+    assert small.design_effect == pytest.approx(big.design_effect, rel=1e-9)
