@@ -120,6 +120,7 @@ def converged_markdown(converged: Path = CONVERGED) -> str:
             table1_markdown(evaluate, models),
             "",
             coherence_markdown(evaluate),
+            *(["", likeness] if (likeness := likeness_markdown(evaluate)) else []),
         ]
     )
 
