@@ -374,3 +374,15 @@ def test_timestamps_default_to_unit_duration_and_handle_two_points():
     assert t[0] == 0.0 and t[-1] == pytest.approx(1.0, rel=1e-12)  # the documented default
     np.testing.assert_allclose(sl.power_law_timestamps(pts[:2], total_time=3.0), [0.0, 3.0])
     np.testing.assert_array_equal(sl.power_law_timestamps(pts[:1]), [0.0])
+
+
+def test_fit_bounds_the_amplitude_by_the_path_length_in_any_direction():
+    # one stroke along the diagonal: the path length (not |x - y|, which is 0 here) bounds the
+    # amplitude, so the fit must reach the target as it does along any other direction
+    t = np.linspace(0.0, 1.0, 100)
+    one = np.array([[3.0, 0.1, -1.2, 0.25, math.pi / 4, math.pi / 4]])
+    points = sl.trajectory(one, t, np.array([0.0, 0.0]))
+    assert np.allclose(points[:, 0], points[:, 1])
+    result = sl.fit(points, t)
+    _check_fit(points, t, result)
+    assert result.success and result.snr_db >= 20.0
