@@ -325,6 +325,25 @@ def train_classifier(
 # -- files ------------------------------------------------------------------------------------
 
 
+def _recorded_metrics(path: Path) -> dict:
+    """The classifiers' ``metrics.json`` as written before, or ``{}`` (missing or unreadable:
+    only the training times it holds are read from it)."""
+    try:
+        recorded = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return recorded if isinstance(recorded, dict) else {}
+
+
+def _train_seconds(recorded, meta: dict) -> dict:
+    """``{"train_seconds": s}`` from the metrics a training wrote (or, for a file saved before
+    the time moved out of it, from its ``meta``); empty when neither has it."""
+    for source in (recorded, meta):
+        if isinstance(source, dict) and isinstance(source.get("train_seconds"), int | float):
+            return {"train_seconds": source["train_seconds"]}
+    return {}
+
+
 def save_classifier(
     path: str | os.PathLike, model: nn.Module, modality: str, meta: Mapping[str, Any]
 ) -> Path:
@@ -491,6 +510,9 @@ def ensure_classifiers(
     models: dict[str, nn.Module] = {}
     metrics: dict[str, Any] = {}
     trained = False
+    # the training time is a run fact: kept in metrics.json, not in the classifier file, whose
+    # bytes then depend on the data and the settings only (a DVC output that stays put)
+    seconds = _recorded_metrics(out_dir / "metrics.json")
     for modality in MODALITIES:
         path = out_dir / f"{modality}.pt"
         model, meta = _reusable(path, modality, fingerprint, settings)
@@ -513,15 +535,15 @@ def ensure_classifiers(
                 "n_train": len(split("train")[LABEL]),
                 "n_test": int(real.sum()),
                 "epochs": settings["epochs"],
-                "train_seconds": round(history["seconds"], 2),
                 "shape_twins": list(SHAPE_TWINS),
             }
+            seconds[modality] = {"train_seconds": round(history["seconds"], 2)}
             save_classifier(path, model, modality, meta)
             trained = True
         models[modality] = model
         metrics[modality] = {
-            k: meta[k]
-            for k in ("test_accuracy", "test_folded_accuracy", "val_accuracy", "train_seconds")
+            **{k: meta[k] for k in ("test_accuracy", "test_folded_accuracy", "val_accuracy")},
+            **_train_seconds(seconds.get(modality), meta),
         }
     # rewritten only when something changed: a reuse (e.g. by prg-evaluate after the DVC
     # `classifiers` stage) must not touch another stage's output

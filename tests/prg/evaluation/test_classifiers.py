@@ -175,6 +175,25 @@ def test_ensure_classifiers_trains_once_then_reuses(data_dir, tmp_path, monkeypa
         assert torch.equal(clf.predict(again[modality], x), clf.predict(models[modality], x))
 
 
+def test_classifier_files_are_the_same_bytes_whatever_the_training_took(data_dir, tmp_path):
+    # two trainings on the same data and settings: the same files (a DVC output that stays
+    # put), the time each took in metrics.json only, kept there when a file is reused
+    first, second = tmp_path / "a", tmp_path / "b"
+    clf.ensure_classifiers(data_dir, first, QUICK, progress=False)
+    clf.ensure_classifiers(data_dir, second, QUICK, progress=False)
+    for modality in clf.MODALITIES:
+        a, b = (d / f"{modality}.pt" for d in (first, second))
+        assert a.read_bytes() == b.read_bytes()
+        assert "train_seconds" not in clf.load_classifier(a)[1]
+    metrics = json.loads((first / "metrics.json").read_text())
+    assert all(metrics[m]["train_seconds"] > 0 for m in clf.MODALITIES)
+    (first / "metrics.json").unlink()  # reused files, no record of their training: no time
+    clf.ensure_classifiers(data_dir, first, QUICK, progress=False)
+    rewritten = json.loads((first / "metrics.json").read_text())
+    assert all("train_seconds" not in rewritten[m] for m in clf.MODALITIES)
+    assert rewritten["traj"]["test_accuracy"] == metrics["traj"]["test_accuracy"]
+
+
 def test_ensure_classifiers_retrains_when_the_data_or_cfg_change(data_dir, tmp_path):
     out = tmp_path / "classifiers"
     clf.ensure_classifiers(data_dir, out, QUICK, progress=False)
