@@ -329,8 +329,8 @@ def _recorded_metrics(path: Path) -> dict:
     """The classifiers' ``metrics.json`` as written before, or ``{}`` (missing or unreadable:
     only the training times it holds are read from it)."""
     try:
-        recorded = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        recorded = read_json(path, "classifier metrics")
+    except UsageError:
         return {}
     return recorded if isinstance(recorded, dict) else {}
 
