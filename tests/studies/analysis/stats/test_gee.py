@@ -349,34 +349,6 @@ def test_gee_rate_not_estimable_without_margin_is_one_row():
     assert rows.test.tolist() == ["GEE rate vs chance"]
 
 
-class _Fit:
-    """A GEE result with chosen estimates, for the guards a real fit reaches only on
-    degenerate data (a diverged or singular fit)."""
-
-    def __init__(self, params, bse):
-        self.params, self.bse = np.asarray(params, float), np.asarray(bse, float)
-
-
-@pytest.mark.parametrize("b, se", [(np.nan, 0.3), (0.2, np.nan), (0.2, 0.0), (0.2, -0.1)])
-def test_gee_rate_refuses_a_non_finite_or_zero_standard_error(monkeypatch, b, se):
-    from studies.analysis.stats import gee
-
-    monkeypatch.setattr(gee, "_gee_fit", lambda *a: (_Fit([b], [se]), "robust", 0.1, []))
-    rows = S.gee_rate(binary_frame(30, 100), "y", margin=0.05)
-    assert (rows.conclusion == "not estimable: no finite estimate").all()
-
-
-@pytest.mark.parametrize("se", [np.nan, np.inf, 0.0])
-def test_gee_difference_refuses_a_non_finite_or_zero_standard_error(monkeypatch, paired_frame, se):
-    from studies.analysis.stats import gee
-
-    monkeypatch.setattr(
-        gee, "_gee_fit", lambda *a: (_Fit([0.5, 0.1], [0.1, se]), "robust", 0.1, [])
-    )
-    row = S.gee_difference(paired_frame).iloc[0]
-    assert row.conclusion == "not estimable: no finite standard error (all answers identical?)"
-
-
 def test_gee_tost_and_non_inferiority_rows_carry_the_statistic_method_and_wording(paired_frame):
     rows = S.gee_difference(paired_frame, margin=0.1)
     ref = gee_difference_reference(paired_frame, "robot")

@@ -179,19 +179,6 @@ def test_mixed_logit_keeps_rows_whose_other_columns_are_missing():
     np.testing.assert_allclose(out.post_mean, ref.post_mean, **VB)
 
 
-def test_mixed_logit_failure_message_is_one_line_of_at_most_200_characters(monkeypatch):
-    from statsmodels.genmod.bayes_mixed_glm import BinomialBayesMixedGLM
-
-    long = "singular\nmatrix " + "x" * 300
-
-    def boom(self, *a, **k):
-        raise np.linalg.LinAlgError(long)
-
-    monkeypatch.setattr(BinomialBayesMixedGLM, "fit_vb", boom)
-    status = S.mixed_logit(_crossed(), "y", "pid", "item").status.iloc[0]
-    assert status == "failed: " + " ".join(f"LinAlgError: {long}".split())[:200]
-
-
 def test_mixed_logit_says_when_the_optimiser_did_not_converge(monkeypatch):
     from statsmodels.genmod.bayes_mixed_glm import BinomialBayesMixedGLM
 
@@ -219,22 +206,6 @@ def test_mixed_logit_other_warnings_leave_the_status_ok(monkeypatch):
     monkeypatch.setattr(BinomialBayesMixedGLM, "fit_vb", noisy)
     out = S.mixed_logit(_crossed(), "y", "pid", "item")
     assert out.status.str.startswith("ok (variational Bayes").all()
-
-
-@pytest.mark.parametrize("broken", ["fe_mean", "fe_sd"])
-def test_mixed_logit_refuses_a_non_finite_posterior(monkeypatch, broken):
-    from statsmodels.genmod.bayes_mixed_glm import BinomialBayesMixedGLM
-
-    fit_vb = BinomialBayesMixedGLM.fit_vb
-
-    def diverged(self):
-        res = fit_vb(self)
-        setattr(res, broken, np.full_like(np.asarray(getattr(res, broken)), np.nan))
-        return res
-
-    monkeypatch.setattr(BinomialBayesMixedGLM, "fit_vb", diverged)
-    out = S.mixed_logit(_crossed(), "y", "pid", "item")
-    assert out.status.tolist() == ["failed: non-finite posterior"]
 
 
 def test_mixed_logit_reads_the_first_rows_by_position_whatever_the_index():
