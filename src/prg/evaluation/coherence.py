@@ -21,6 +21,7 @@ Each generated trajectory and image is also read by a second, independently buil
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from typing import Any
 
 import torch
 from torch import nn
@@ -47,14 +48,17 @@ def generated_classes(
     batch_size: int = 512,
     seed: int = 0,
     impute_steps: int = 0,
+    posteriors: Posteriors | None = None,
 ) -> torch.Tensor:
     """Class assigned to each generated ``target`` sample (shape (N,), long): a generated label's
-    most probable class, the classifier's (``classifiers[target]``) for anything else."""
+    most probable class, the classifier's (``classifiers[target]``) for anything else.
+    ``posteriors``: ``model``'s posteriors on ``data``, shared with other cells
+    (:class:`Posteriors`); None computes them for this call alone."""
     readers = (
         [] if MODALITIES[target].kind == "class" else [_classifier_reader(classifiers[target])]
     )
     return generated_readings(
-        model, target, given, data, readers, temperature, batch_size, seed, impute_steps
+        model, target, given, data, readers, temperature, batch_size, seed, impute_steps, posteriors
     )[:, 0]
 
 
@@ -73,13 +77,14 @@ def generated_readings(
     batch_size: int = 512,
     seed: int = 0,
     impute_steps: int = 0,
+    posteriors: Posteriors | None = None,
 ) -> torch.Tensor:
     """The class each reader assigns to each generated ``target`` sample; every reader reads the
     same generated samples.
 
     Parameters
     ----------
-    model, target, given, data, temperature, batch_size, seed, impute_steps
+    model, target, given, data, temperature, batch_size, seed, impute_steps, posteriors
         As :func:`generated_classes`.
     readers : sequence of callables
         Each maps a batch of generated ``target`` samples to class ids (N,). Ignored for a
@@ -96,7 +101,7 @@ def generated_readings(
         raise ValueError(f"generated {target} needs at least one reader")
     out = torch.empty(samples(data), len(readers), dtype=torch.long)
     for rows, generated in _generated_batches(
-        model, target, given, data, temperature, batch_size, seed, impute_steps
+        model, target, given, data, temperature, batch_size, seed, impute_steps, posteriors
     ):
         for column, read in enumerate(readers):
             out[rows, column] = read(generated)
@@ -113,6 +118,7 @@ def generated_samples(
     batch_size: int = 512,
     seed: int = 0,
     impute_steps: int = 0,
+    posteriors: Posteriors | None = None,
 ) -> torch.Tensor:
     """One generated ``target`` sample per test sample (shape (N, ...)), drawn as
     :func:`generated_classes` draws them."""
@@ -120,7 +126,7 @@ def generated_samples(
         [
             g
             for _, g in _generated_batches(
-                model, target, given, data, temperature, batch_size, seed, impute_steps
+                model, target, given, data, temperature, batch_size, seed, impute_steps, posteriors
             )
         ]
     )
@@ -131,18 +137,40 @@ def samples(data: Inputs) -> int:
     return len(next(iter(data.values())))
 
 
-def _generated_batches(model, target, given, data, temperature, batch_size, seed, impute_steps):
-    torch.manual_seed(seed)  # generate() draws latents from the global generator
+class Posteriors:
+    """One model's generation posteriors
+    (:meth:`~prg.models.base.MultimodalVAE.generation_posterior`) on one test set, computed once per (input subset, impute steps, batch) and shared by every
+    cell decoded from them: the targets of a subset, its posterior-mean and sampled kinds, and
+    the roughness rows. Imputing is what makes sharing pay: each imputed posterior is
+    ``impute_steps`` rounds of decoding and encoding every missing modality (MUSE from a
+    trajectory: 20 image decodings and encodings)."""
+
+    def __init__(self, model: MultimodalVAE, data: Inputs) -> None:
+        self.model, self.data = model, data
+        self._kept: dict[tuple, Any] = {}
+
+    def get(self, given: tuple[str, ...], impute_steps: int, rows: slice) -> Any:
+        key = (given, impute_steps, rows.start, rows.stop)
+        if key not in self._kept:
+            inputs = {m: self.data[m][rows] for m in given}
+            self._kept[key] = self.model.generation_posterior(inputs, impute_steps)
+        return self._kept[key]
+
+
+def _generated_batches(
+    model, target, given, data, temperature, batch_size, seed, impute_steps, posteriors=None
+):
+    if posteriors is None:
+        posteriors = Posteriors(model, data)
+    elif posteriors.model is not model or posteriors.data is not data:
+        raise ValueError("posteriors were computed for another model or another test set")
+    torch.manual_seed(seed)  # sampling draws latents from the global generator
     n = samples(data)
     for start in range(0, n, batch_size):
-        rows = slice(start, start + batch_size)
-        generated = model.generate(
-            {m: data[m][rows] for m in given},
-            target,
-            n=1,
-            temperature=temperature,
-            impute_steps=impute_steps,
-        )[0]
+        rows = slice(start, min(start + batch_size, n))
+        posterior = posteriors.get(given, impute_steps, rows)
+        inputs = {m: data[m][rows] for m in given}
+        generated = model.decode_posterior(posterior, inputs, target, 1, temperature)[0]
         yield rows, generated
 
 

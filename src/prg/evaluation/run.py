@@ -46,6 +46,7 @@ from prg.evaluation.agreement import METRIC_SECOND_KEYS, SECOND_KEYS, agreement,
 from prg.evaluation.classifiers import MODALITIES as CLASSIFIED
 from prg.evaluation.classifiers import ensure_classifiers, load_classifier, predict
 from prg.evaluation.coherence import (
+    Posteriors,
     coherence_cells,
     folded_correct,
     generated_classes,
@@ -235,21 +236,29 @@ def generation_kinds(
     return kinds
 
 
+def shared_posteriors(models: Models, data: Data) -> dict[str, Posteriors]:
+    """An empty :class:`~prg.evaluation.coherence.Posteriors` per model on ``data``."""
+    return {name: Posteriors(model, data) for name, (model, _, _) in models.items()}
+
+
 def coherence_rows(
     models: Models,
     classifiers: Mapping[str, Any],
-    test: Data,
+    data: Data,
     settings: EvaluationSettings,
     second: Mapping[str, Reader] | None = None,
+    posteriors: Mapping[str, Posteriors] | None = None,
 ) -> tuple[list[dict], dict]:
-    """Rows per (model, target, subset, kind), and per-class rates for the figures.
+    """Rows per (model, target, subset, kind) on the test samples ``data``, and per-class rates
+    for the figures. ``posteriors``: each model's :class:`~prg.evaluation.coherence.Posteriors`
+    on ``data``, shared with :func:`roughness_rows` (None: computed here alone).
 
     ``coherence`` and ``coherence_folded`` are the first classifiers' (``classifiers``); with
     ``second`` readers (:func:`~prg.evaluation.second_readers.ensure_second_readers`) each row of
     a generated trajectory or image also holds the second reading and the agreement of the two
     (:func:`~prg.evaluation.agreement.agreement`); rows of generated labels hold None there.
     """
-    data = subset(test, settings.n_test, settings.seed)
+    posteriors = posteriors or shared_posteriors(models, data)
     labels = data[LABEL]
     jobs = [
         (name, model, target, given, kind, temperature, steps)
@@ -277,6 +286,7 @@ def coherence_rows(
             settings.coherence.batch_size,
             settings.seed,
             steps,
+            posteriors[name],
         )
         predicted = readings[:, 0]
         correct = predicted == labels
@@ -306,15 +316,14 @@ def coherence_rows(
 
 
 def shifted_image_rows(
-    models: Models, classifiers: Mapping[str, Any], test: Data, settings: EvaluationSettings
+    models: Models, classifiers: Mapping[str, Any], data: Data, settings: EvaluationSettings
 ) -> list[dict]:
     """Coherence of what each model that takes an image alone generates from the test images
-    as they are (``shift`` 0) and moved off-centre by up to each of
+    ``data`` as they are (``shift`` 0) and moved off-centre by up to each of
     ``settings.coherence.image_shifts`` pixels per axis (one seeded random offset per image;
     posterior mean; the image's own reconstruction left out). A reader's letters are rarely
     centred to the pixel as the dataset renders them."""
     shifts = settings.coherence.image_shifts
-    data = subset(test, settings.n_test, settings.seed)
     labels = data[LABEL]
     rows = []
     for name, (model, _, _) in models.items():
@@ -351,11 +360,16 @@ def shifted_image_rows(
     return rows
 
 
-def roughness_rows(models: Models, test: Data, settings: EvaluationSettings) -> list[dict]:
-    """Roughness of the letters each model decodes (posterior mean) from labels and from images,
-    as a ratio to the roughness of the same test samples' letters
-    (:mod:`prg.evaluation.smoothness`)."""
-    data = subset(test, settings.n_test, settings.seed)
+def roughness_rows(
+    models: Models,
+    data: Data,
+    settings: EvaluationSettings,
+    posteriors: Mapping[str, Posteriors] | None = None,
+) -> list[dict]:
+    """Roughness of the letters each model decodes (posterior mean) from labels and from images
+    of the test samples ``data``, as a ratio to the roughness of their own letters
+    (:mod:`prg.evaluation.smoothness`); ``posteriors`` as :func:`coherence_rows`."""
+    posteriors = posteriors or shared_posteriors(models, data)
     reference = median_roughness(data[TRAJ].numpy())
     rows = []
     for name, (model, _, _) in models.items():
@@ -369,14 +383,24 @@ def roughness_rows(models: Models, test: Data, settings: EvaluationSettings) -> 
                 continue
             for kind, steps in means:
                 rows.append(
-                    _roughness_row(name, model, given, kind, steps, data, reference, settings)
+                    _roughness_row(
+                        name, model, given, kind, steps, data, reference, settings, posteriors[name]
+                    )
                 )
     return rows
 
 
-def _roughness_row(name, model, given, kind, steps, data, reference, settings) -> dict:
+def _roughness_row(name, model, given, kind, steps, data, reference, settings, posteriors):
     decoded = generated_samples(
-        model, TRAJ, given, data, 0.0, settings.coherence.batch_size, settings.seed, steps
+        model,
+        TRAJ,
+        given,
+        data,
+        0.0,
+        settings.coherence.batch_size,
+        settings.seed,
+        steps,
+        posteriors,
     ).numpy()
     median = median_roughness(decoded)
     row = {
@@ -580,15 +604,18 @@ def run_evaluation(
         )
         result.classifiers = classifier_meta(classifier_dir)
         result.classifiers.update({r.name: r.meta for r in second.values()})
+        # one seeded subset for every coherence part, so that they share each model's posteriors
+        data = subset(test, settings.n_test, settings.seed)
+        posteriors = shared_posteriors(models, data)
         result.coherence, result.per_class = coherence_rows(
-            models, classifiers, test, settings, second
+            models, classifiers, data, settings, second, posteriors
         )
         result.readers = {
             m: (lambda x, first=classifiers[m]: predict(first, x), reader.read)
             for m, reader in second.items()
         }
-        result.smoothness = roughness_rows(models, test, settings)
-        result.shifted_images = shifted_image_rows(models, classifiers, test, settings)
+        result.smoothness = roughness_rows(models, data, settings, posteriors)
+        result.shifted_images = shifted_image_rows(models, classifiers, data, settings)
     if "likeness" in settings.parts:
         classifiers = ensure_classifiers(
             data_dir, classifier_dir, settings.classifier, progress=settings.progress

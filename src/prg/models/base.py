@@ -219,16 +219,38 @@ class MultimodalVAE(nn.Module, ABC):
             Trajectory means (n, B, 200), class probabilities (n, B, 62) or pixel
             probabilities (n, B, 1, 28, 28).
         """
+        self._check_target(target)
+        posterior = self.generation_posterior(inputs, impute_steps)
+        return self.decode_posterior(posterior, inputs, target, n, temperature)
+
+    def _check_target(self, target: str) -> None:
         if target not in self.generated_modalities:
             raise UsageError(
                 f"{self.family} cannot generate {target!r}: it generates "
                 f"{list(self.generated_modalities)}"
             )
+
+    @torch.no_grad()
+    def generation_posterior(self, inputs: Inputs, impute_steps: int = 0) -> Gaussian:
+        """The posterior :meth:`generate` decodes from: :meth:`encode`, or
+        :meth:`encode_imputed` with ``impute_steps`` > 0. A caller that decodes several targets
+        from the same inputs computes it once and passes it to :meth:`decode_posterior`."""
         if isinstance(impute_steps, bool) or not isinstance(impute_steps, int) or impute_steps < 0:
             raise UsageError(f"impute_steps must be an integer >= 0, got {impute_steps!r}")
-        posterior = (
-            self.encode_imputed(inputs, impute_steps) if impute_steps else self.encode(inputs)
-        )
+        return self.encode_imputed(inputs, impute_steps) if impute_steps else self.encode(inputs)
+
+    @torch.no_grad()
+    def decode_posterior(
+        self,
+        posterior: Gaussian,
+        inputs: Inputs,
+        target: str,
+        n: int = 1,
+        temperature: float = 0.0,
+    ) -> torch.Tensor:
+        """:meth:`generate`'s outputs from a posterior of ``inputs``
+        (:meth:`generation_posterior`); ``inputs`` are the decoders' context."""
+        self._check_target(target)
         z = posterior.sample(n, temperature)  # temperature 0: a mean (Mixture: a component's)
         flat = z.reshape(-1, z.shape[-1])
         context = None

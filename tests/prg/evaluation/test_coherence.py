@@ -34,8 +34,10 @@ def test_readings_share_the_generated_samples_and_labels_have_one():
     class Echo:
         """A stand-in model: the generated trajectory's first value is the input label."""
 
-        def generate(self, inputs, target, n, temperature, impute_steps):
-            label = inputs["label"]
+        def generation_posterior(self, inputs, impute_steps):
+            return inputs["label"]
+
+        def decode_posterior(self, label, inputs, target, n, temperature):
             if target == "label":
                 return torch.nn.functional.one_hot(label, 62).float()[None]
             out = torch.zeros(len(label), 200)
@@ -50,3 +52,38 @@ def test_readings_share_the_generated_samples_and_labels_have_one():
     assert (readings[:, 1] - readings[:, 0]).tolist() == [1] * 7
     labels = generated_readings(Echo(), "label", ("label",), data, readers, batch_size=3)
     assert labels.shape == (7, 1) and labels[:, 0].tolist() == list(range(7))
+
+
+def _muse(checkpoint):
+    from prg.models.checkpoint import load_model
+
+    return load_model(checkpoint)[0]
+
+
+def test_shared_posteriors_decode_what_generate_decodes_and_impute_once(untrained_muse_checkpoint):
+    """Sharing one imputed posterior between the targets and the kinds changes no generated
+    sample, and imputes each (subset, batch) once however many cells decode from it."""
+    from prg.evaluation.coherence import Posteriors, generated_samples
+
+    model = _muse(untrained_muse_checkpoint)
+    g = torch.Generator().manual_seed(0)
+    data = {
+        "traj": torch.randn(10, 200, generator=g),
+        "label": torch.randint(0, 62, (10,), generator=g),
+        "image": torch.rand(10, 1, 28, 28, generator=g),
+    }
+    calls = []
+    impute = model.encode_imputed
+    model.encode_imputed = lambda inputs, steps: calls.append(steps) or impute(inputs, steps)
+    shared = Posteriors(model, data)
+    for target in ("traj", "image", "label"):
+        for temperature in (0.0, 1.0):
+            alone = generated_samples(model, target, ("label",), data, temperature, 4, 3, 5)
+            together = generated_samples(
+                model, target, ("label",), data, temperature, 4, 3, 5, shared
+            )
+            assert torch.equal(alone, together), (target, temperature)
+    # 6 cells computed alone impute each of the 3 batches; shared, the 3 batches once
+    assert len(calls) == 6 * 3 + 3
+    with pytest.raises(ValueError, match="another model or another test set"):
+        generated_samples(model, "traj", ("label",), dict(data), 0.0, 4, 3, 5, shared)
