@@ -40,9 +40,10 @@ system: ## Install the Debian packages the tests and the demo use, if missing (r
 
 setup: system $(STAMP) ## Create .venv, install system packages, torch (CPU) and the project (idempotent)
 
-# Torch splits some sums (the image networks' convolutions) by thread: the models are the same bytes
-# only for the same number of threads, so the demo trains with 2 (the reference machine's cores)
-# unless OMP_NUM_THREADS says otherwise; dvc.lock was made so.
+# Torch splits some sums (the image networks' convolutions) by thread, so results are the same bytes
+# only for the same number of threads: dvc.yaml's train stage gives each family one thread (two
+# trainings at once), the other stages run with 2 (the reference machine's cores) unless
+# OMP_NUM_THREADS says otherwise; dvc.lock was made so.
 demo: setup ## Run the whole pipeline (dvc repro): data, models, evaluation, Table II, robot, studies
 	OMP_NUM_THREADS=$${OMP_NUM_THREADS:-2} dvc repro
 	@for family in cvae avae_ts avae_ti muse; do \

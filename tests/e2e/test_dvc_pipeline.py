@@ -99,17 +99,23 @@ def test_dvc_repro_prepare_equals_prg_prepare_and_is_idempotent(tmp_path):
     assert "up to date" in _dvc(repo, "status", "prepare").stdout
 
 
-@pytest.mark.slow  # a training and an evaluation through dvc: about 2 min of both cores
+@pytest.mark.slow  # four trainings and an evaluation through dvc: about 3 min of both cores
 def test_dvc_plots_show_renders_the_training_curves_and_coherence_plots(tmp_path):
-    """The pipeline's plots from real outputs: `dvc repro train@cvae` writes its history.csv,
-    `prg-evaluate` (coherence of that model) its reports/plots/, and `dvc plots show` renders
-    them to HTML (the other families' curves are absent here: DVC leaves them out)."""
+    """The pipeline's plots from real outputs: `dvc repro train` trains the four families in one
+    multirun and writes each one's history.csv, `prg-evaluate` (coherence of one model) its
+    reports/plots/, and `dvc plots show` renders them to HTML."""
     repo = _small_repo(tmp_path)
-    trained = _dvc(repo, "repro", "train@cvae")
+    trained = _dvc(repo, "repro", "train")
     assert trained.returncode == 0, trained.stdout[-3000:] + trained.stderr[-3000:]
-    history = (repo / "models/cvae/history.csv").read_text().splitlines()
-    assert history[0].split(",")[:4] == ["epoch", "step", "train_loss", "val_loss"]
-    assert len(history) == 1 + 16  # one row per epoch of the quick profile's 16
+    epochs = yaml.safe_load((repo / "conf/experiment/quick.yaml").read_text())["quick_epochs"]
+    for family in ("cvae", "avae_ts", "avae_ti", "muse"):
+        history = (repo / f"models/{family}/history.csv").read_text().splitlines()
+        assert history[0].split(",")[:4] == ["epoch", "step", "train_loss", "val_loss"]
+        assert len(history) == 1 + epochs[family], family  # one row per epoch of its budget
+        assert (repo / f"models/{family}/model.ckpt").stat().st_size > 0
+    # nothing changed: the stage is up to date and trains nothing
+    again = _dvc(repo, "repro", "train")
+    assert "didn't change" in again.stdout or "up to date" in again.stdout, again.stdout
     env = {"PRG_CONF_DIR": str(repo / "conf"), "PRG_ROOT": str(repo)}
     evaluated = run_cli(
         "prg-evaluate",
