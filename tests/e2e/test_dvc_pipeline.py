@@ -99,7 +99,7 @@ def test_dvc_repro_prepare_equals_prg_prepare_and_is_idempotent(tmp_path):
     assert "up to date" in _dvc(repo, "status", "prepare").stdout
 
 
-@pytest.mark.slow  # four trainings and an evaluation through dvc: about 3 min of both cores
+@pytest.mark.slow  # four trainings and an evaluation through dvc: about 1 min of both cores
 def test_dvc_plots_show_renders_the_training_curves_and_coherence_plots(tmp_path):
     """The pipeline's plots from real outputs: `dvc repro train` trains the four families in one
     multirun and writes each one's history.csv, `prg-evaluate` (coherence of one model) its
