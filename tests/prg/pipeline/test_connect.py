@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -118,6 +119,41 @@ def test_target_inside_the_turning_circle_is_reached_not_orbited():
     check_guarantees(prev, nxt, result, P.delta, P.alpha_max, P.max_steps)
 
 
+@pytest.mark.parametrize(
+    ("delta", "alpha_deg"), [(P.delta, math.degrees(P.alpha_max)), (0.08, 30.0)]
+)
+def test_every_target_inside_either_turning_circle_is_reached_the_same_way_by_both_branches(
+    delta, alpha_deg
+):
+    """Targets all over the pen's two tightest turning circles (radius delta / (2 sin(alpha/2)),
+    centred a radius to the left and to the right of the pen heading east) are reached by
+    steering, never by the straight fallback; and the homing branch (scalars, the first point
+    alone) takes the very steps the candidate branch takes when the first point is the only
+    candidate."""
+    alpha = math.radians(alpha_deg)
+    radius = delta / (2 * math.sin(alpha / 2))
+    prev = np.column_stack([np.linspace(-1.0, 0.0, 30), np.zeros(30)])
+    reached = 0
+    for side in (1.0, -1.0):
+        for rho in (0.3, 0.6, 0.9, 0.97):
+            for phi in np.linspace(0.0, 2 * np.pi, 12, endpoint=False):
+                first = np.array(
+                    [rho * radius * math.cos(phi), side * radius * (1 + rho * math.sin(phi))]
+                )
+                if np.hypot(*first) <= delta:
+                    continue  # already joined: nothing to steer
+                nxt = first[None, :]
+                kw = {"delta": delta, "alpha_max": alpha, "max_steps": 400}
+                steering = connect_letters(prev, nxt, home_radius=0.0, **kw)
+                homing = connect_letters(prev, nxt, home_radius=10.0, **kw)
+                assert not steering.fallback and not homing.fallback, (side, rho, phi)
+                check_guarantees(prev, nxt, steering, delta, alpha, 400)
+                assert steering.steered == homing.steered
+                np.testing.assert_allclose(homing.points, steering.points, atol=1e-9)
+                reached += 1
+    assert reached > 80
+
+
 def test_retrace_joins_inside_the_letter_and_runs_back_to_its_first_point():
     # a vertical stroke written top-down; the pen arrives from the left at its middle
     prev = np.column_stack([np.linspace(-1.0, 0.0, 20), np.zeros(20)])
@@ -162,9 +198,11 @@ def test_zero_steps_is_the_straight_joiner():
     np.testing.assert_allclose(result.points, straight_connection(prev, nxt).points)
 
 
-def test_letters_already_within_delta_need_no_connection():
-    prev = np.array([[0.0, 0.0], [1.0, 0.0]])
-    nxt = np.array([[1.03, 0.0], [2.0, 0.0]])
+@pytest.mark.parametrize("offset", [(0.0, 0.0), (-3.0, 2.5), (4.0, -1.5)])
+def test_letters_already_within_delta_need_no_connection(offset):
+    """Wherever on the page the pair lies (the distance, not the coordinates, decides)."""
+    prev = np.array([[0.0, 0.0], [1.0, 0.0]]) + offset
+    nxt = np.array([[1.03, 0.02], [2.0, 0.0]]) + offset
     result = connect_letters(prev, nxt)
     assert result.points.shape == (0, 2) and result.steered == 0 and not result.fallback
 
@@ -520,6 +558,41 @@ def test_connect_sequence_offers_the_hand_method_and_keeps_spaces_straight():
     np.testing.assert_allclose(out[1].points, straight, atol=1e-9)
     with pytest.raises(Exception, match="'hand', 'alg1' or 'straight'"):
         connect_sequence(letters, method="curly")
+
+
+def test_connect_sequence_hand_joins_each_pair_as_hand_connection_or_lifts_the_pen():
+    """Each pair of ``method="hand"`` is what :func:`hand_connection` makes of it (with the
+    given settings), except where the writer lifts the pen (:func:`lifts_pen`) or a space
+    separates the letters: there the straight pen-up travel."""
+    from prg.pipeline.joins import hand_connection, lifts_pen
+
+    stem_then_foot = np.array([[0.9, 1.0], [0.9, 0.5], [0.9, 0.0], [0.75, -0.12], [0.6, -0.1]])
+    letters = [
+        _arc((0.0, 0.25), (0.25, 0.25), 90, 400),  # leaves on its right: joined
+        stem_then_foot,  # ends left of its stem: the pen lifts
+        _arc((1.6, 0.25), (0.25, 0.25), 120, 420),
+        _arc((2.4, 0.25), (0.25, 0.25), 90, 400),
+        _arc((3.6, 0.25), (0.25, 0.25), 180, 540),
+    ]
+    params = ConnectionSettings(delta=0.03, alpha_max=math.radians(25.0), home_radius=0.3)
+    breaks = [False, False, False, True]
+    out = connect_sequence(letters, params, method="hand", breaks=breaks)
+    lifted = [lifts_pen(a, b) for a, b in itertools.pairwise(letters)]
+    assert lifted[1] and not lifted[0]  # the case holds both kinds of pair
+    for i, (a, b) in enumerate(itertools.pairwise(letters)):
+        if breaks[i] or lifted[i]:
+            assert out[i].pen_up, i
+            straight = straight_connection(a, b, params.delta)
+            np.testing.assert_array_equal(out[i].points, straight.points)
+        else:
+            expected = hand_connection(a, b, letters, params)
+            assert not out[i].pen_up, i
+            _same_result(out[i], expected)
+            assert out[i].steered > 0, i  # steered with the given settings, not straight
+    with_defaults = connect_sequence(letters, method="hand", breaks=breaks)
+    assert with_defaults[0].points.shape != out[0].points.shape or not np.allclose(
+        with_defaults[0].points, out[0].points
+    )  # the settings reach the joins
 
 
 # ============================================================================= connection strokes
