@@ -116,9 +116,13 @@ def test_a_horizontal_stroke_is_sized_by_the_width_guard():
     assert (x1 - x0, y1 - y0) == pytest.approx((P.max_width * H, 0.0))
 
 
-def test_a_letter_with_no_extent_is_refused():
+@pytest.mark.parametrize("n", [1, 5])
+def test_a_letter_with_no_extent_is_refused(n):
+    """One point is a letter of the right shape, refused for its extent like a still pen."""
     with pytest.raises(UsageError, match="letter 'a' has zero extent"):
-        place_letter(np.zeros((5, 2)), "a", 0.0)
+        place_letter(np.zeros((n, 2)), "a", 0.0)
+    with pytest.raises(UsageError, match=r"letter 'a' must have shape \(n, 2\), got \(0, 2\)"):
+        place_letter(np.zeros((0, 2)), "a", 0.0)
 
 
 def test_letter_count_must_match_the_text():
@@ -129,6 +133,8 @@ def test_letter_count_must_match_the_text():
 def test_unsupported_characters_are_named():
     with pytest.raises(UsageError, match=r"unsupported characters '!'"):
         layout_letters([letter(0), letter(1)], "a!")
+    with pytest.raises(UsageError, match=r"unsupported characters '!', '#': accepted are"):
+        layout_letters([letter(0), letter(1), letter(2)], "a!#")
 
 
 def test_bad_layout_values_are_named():
