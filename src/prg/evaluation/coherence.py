@@ -139,11 +139,12 @@ def samples(data: Inputs) -> int:
 
 class Posteriors:
     """One model's generation posteriors
-    (:meth:`~prg.models.base.MultimodalVAE.generation_posterior`) on one test set, computed once per (input subset, impute steps, batch) and shared by every
-    cell decoded from them: the targets of a subset, its posterior-mean and sampled kinds, and
-    the roughness rows. Imputing is what makes sharing pay: each imputed posterior is
-    ``impute_steps`` rounds of decoding and encoding every missing modality (MUSE from a
-    trajectory: 20 image decodings and encodings)."""
+    (:meth:`~prg.models.base.MultimodalVAE.generation_posterior`) on one test set, computed
+    once per (input subset, impute steps, batch) and shared by every cell decoded from them:
+    the targets of a subset, its posterior-mean and sampled kinds, and the roughness rows.
+    Imputing is what makes sharing pay: each imputed posterior is ``impute_steps`` rounds of
+    decoding and encoding every missing modality (MUSE from a trajectory: 20 image decodings
+    and encodings)."""
 
     def __init__(self, model: MultimodalVAE, data: Inputs) -> None:
         self.model, self.data = model, data

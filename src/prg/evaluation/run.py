@@ -258,7 +258,8 @@ def coherence_rows(
     a generated trajectory or image also holds the second reading and the agreement of the two
     (:func:`~prg.evaluation.agreement.agreement`); rows of generated labels hold None there.
     """
-    posteriors = posteriors or shared_posteriors(models, data)
+    if posteriors is None:
+        posteriors = shared_posteriors(models, data)
     labels = data[LABEL]
     jobs = [
         (name, model, target, given, kind, temperature, steps)
@@ -369,7 +370,8 @@ def roughness_rows(
     """Roughness of the letters each model decodes (posterior mean) from labels and from images
     of the test samples ``data``, as a ratio to the roughness of their own letters
     (:mod:`prg.evaluation.smoothness`); ``posteriors`` as :func:`coherence_rows`."""
-    posteriors = posteriors or shared_posteriors(models, data)
+    if posteriors is None:
+        posteriors = shared_posteriors(models, data)
     reference = median_roughness(data[TRAJ].numpy())
     rows = []
     for name, (model, _, _) in models.items():
