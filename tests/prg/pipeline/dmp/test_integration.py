@@ -90,11 +90,22 @@ def test_integrating_on_the_output_grid_is_close_and_the_default_finer_grid_clos
         ({"dt": 0.1, "n_samples": 10}, "n_samples, dt: give one"),
         ({"samples_per_basis": 0}, "samples_per_basis: expected an integer >= 1"),
         ({"samples_per_basis": True}, "samples_per_basis: expected an integer >= 1"),
+        ({"start_velocity": [1.0]}, r"start_velocity: expected shape \(2,\), got shape \(1,\)"),
+        ({"goal_velocity": [1.0, 2.0, 3.0]}, r"goal_velocity: expected shape \(2,\)"),
     ],
 )
 def test_bad_rollout_inputs_raise_value_error_naming_the_argument(word_dmp, kwargs, match):
     with pytest.raises(ValueError, match=match):
         rollout(word_dmp, **kwargs)
+
+
+def test_a_time_step_as_long_as_the_movement_gives_its_two_ends(word_dmp):
+    """``dt`` gives round(tau / dt) + 1 samples, at least 2: the start and the end."""
+    ends = rollout(word_dmp, dt=word_dmp.tau)
+    assert ends.shape == (2, 2)
+    assert_array_equal(ends[0], word_dmp.y0)
+    assert rollout(word_dmp, dt=10 * word_dmp.tau).shape == (2, 2)
+    assert rollout(word_dmp, dt=word_dmp.tau / 2).shape == (3, 2)
 
 
 # ----------------------------------------------------------------------------- robustness

@@ -27,6 +27,24 @@ def test_five_point_differences_make_targets_exact_for_quartic_paths():
     assert_allclose(targets, expected, atol=1e-9)
 
 
+def test_the_goal_velocity_term_and_the_documented_defaults():
+    """With ``velocities="demonstrated"`` the goal moves, g_m(t) = g - g' (tau - t), and the
+    targets lose ``D tau g' / K`` (g' the path's last velocity, exact for a quartic); left out,
+    the goal is at rest. (``tau`` cannot change the targets of given points: y'' scales as
+    tau^-2, y' as tau^-1 and the phase runs on t / tau.)"""
+    t = np.linspace(0.0, 2.0, 41)
+    y = np.column_stack([t**4 - 3 * t**3 + t, 2 * t**2 - t**4 / 5])
+    end_velocity = np.array([4 * 8 - 9 * 4 + 1, 4 * 2 - 4 * 8 / 5])
+    k, d = 100.0, 20.0
+    _, rest = forcing_targets(y, tau=2.0, stiffness=k, damping=d)
+    _, moving = forcing_targets(y, tau=2.0, stiffness=k, damping=d, velocities="demonstrated")
+    expected = rest + np.outer(2.0 - t, end_velocity) - d * 2.0 * end_velocity / k
+    assert_allclose(moving, expected, atol=1e-9)
+    x_default, default = forcing_targets(y, stiffness=k, damping=d)
+    assert_allclose(default, rest, rtol=1e-12, atol=1e-12)
+    assert_allclose(x_default, forcing_targets(y, tau=5.0)[0], rtol=1e-12)
+
+
 def test_second_differences_are_fourth_order_in_the_interior():
     # five-point centred stencils: halving the step divides the error of y'' by ~16 (a stencil
     # off the centre is third order: ~8)
