@@ -119,8 +119,8 @@ def test_target_inside_the_turning_circle_is_reached_not_orbited():
     check_guarantees(prev, nxt, result, P.delta, P.alpha_max, P.max_steps)
 
 
-@pytest.mark.parametrize(
-    ("delta", "alpha_deg"), [(P.delta, math.degrees(P.alpha_max)), (0.08, 30.0)]
+@pytest.mark.parametrize(  # radii 0.16, 0.15 and 3.2 (a circle wider than 1: no unit hides)
+    ("delta", "alpha_deg"), [(P.delta, math.degrees(P.alpha_max)), (0.08, 30.0), (1.0, 18.0)]
 )
 def test_every_target_inside_either_turning_circle_is_reached_the_same_way_by_both_branches(
     delta, alpha_deg
