@@ -13,6 +13,19 @@ from studies.stimuli.sample import Sample
 from studies.stimuli.trajectories import trajectory_sample
 
 
+def letter_samples(
+    labels: np.ndarray, writers: np.ndarray, writer: str, wanted: Sequence[int], rng
+) -> np.ndarray:
+    """Row indices of ``writer``'s letters for the classes ``wanted``, one per letter, each drawn
+    anew among the writer's samples of its class (the dataset holds two per class, as UJI's two
+    sessions): a person does not write a letter the same way twice, so neither the two l's of
+    "bell" nor the e's of two words are one copied sample wherever the writer wrote two."""
+    return np.array(
+        [rng.choice(np.flatnonzero((writers == writer) & (labels == y))) for y in wanted],
+        dtype=np.int64,
+    )
+
+
 def held_out_words(
     words: Sequence[str],
     n: int,
@@ -22,7 +35,8 @@ def held_out_words(
     delayed_strokes: bool = True,
 ) -> dict[str, list[Sample]]:
     """Human words for a pilot: ``n`` writers of the dataset's test and validation splits
-    (people no model was trained on) per word, each word made of that writer's own letters, laid out and joined the way the
+    (people no model was trained on) per word, each word made of that writer's own letters
+    (:func:`letter_samples`), laid out and joined the way the
     robot's are (:func:`prg.pipeline.compose.compose_word` with ``prg-write``'s settings), so
     that what tells them apart is the letters and the hand, not the joining. Writers who did
     not write every letter of a word are skipped for it. Each word is saved as
@@ -60,9 +74,7 @@ def held_out_words(
             )
         out[word] = []
         for k, writer in enumerate(rng.choice(able, size=n, replace=False)):
-            letters = np.stack(
-                [traj[np.flatnonzero((writers == writer) & (labels == y))[0]] for y in wanted]
-            )
+            letters = traj[letter_samples(labels, writers, writer, wanted, rng)]
             settings = replace(GenerateSettings(seed=k), delayed_strokes=delayed_strokes)
             traj_word, _ = compose_word(letters, word, settings)
             writer_id = f"pilot-{writer}"

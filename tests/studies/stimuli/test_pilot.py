@@ -62,3 +62,24 @@ def test_pilot_stand_ins_keep_the_robots_dots_and_bars_as_delayed_strokes():
             assert gap < original + 0.3 * np.ptp(robot.strokes[0][:, 1])
     for made in stand_ins(robot, 2, seed=4, delayed_strokes=False):
         assert len(made.strokes) == 1 and made.delayed == ()
+
+
+def test_a_pilot_writers_letters_are_drawn_anew_among_their_samples_of_the_class():
+    """Every letter is one of the writer's own samples of its class; a class written several
+    times is not one copied sample each time (over seeds both of its samples appear)."""
+    from studies.stimuli.pilot import letter_samples
+
+    labels = np.array([0, 0, 1, 1, 0, 1, 2])
+    writers = np.array(["w1", "w1", "w1", "w1", "w2", "w2", "w1"])
+    wanted = [0, 0, 1, 2, 0]
+    seen = set()
+    for seed in range(20):
+        rows = letter_samples(labels, writers, "w1", wanted, np.random.default_rng(seed))
+        assert rows.dtype == np.int64 and len(rows) == len(wanted)
+        assert (writers[rows] == "w1").all() and (labels[rows] == wanted).all()
+        assert rows[3] == 6  # the writer's only sample of class 2
+        seen.update((i, int(r)) for i, r in enumerate(rows))
+    for i, y in enumerate(wanted[:3]):
+        assert {r for j, r in seen if j == i} == set(
+            np.flatnonzero((writers == "w1") & (labels == y))
+        )
