@@ -62,7 +62,8 @@ def held_out_words(
         [sp["writer"][k].astype(str) for sp, k in zip(splits, keep, strict=True)]
     )
     names = sorted(set(writers))
-    rng = np.random.default_rng([seed, 11])
+    rng = np.random.default_rng([seed, 11])  # the writers
+    letter_rng = np.random.default_rng([seed, 12])  # their letters: the writers do not hang on it
     out: dict[str, list[Sample]] = {}
     for word in words:
         wanted = [char_to_label(c) for c in word if c != " "]
@@ -74,7 +75,7 @@ def held_out_words(
             )
         out[word] = []
         for k, writer in enumerate(rng.choice(able, size=n, replace=False)):
-            letters = traj[letter_samples(labels, writers, writer, wanted, rng)]
+            letters = traj[letter_samples(labels, writers, writer, wanted, letter_rng)]
             settings = replace(GenerateSettings(seed=k), delayed_strokes=delayed_strokes)
             traj_word, _ = compose_word(letters, word, settings)
             writer_id = f"pilot-{writer}"
