@@ -93,7 +93,8 @@ baselines: setup ## Families x 5 seeds (quick), evaluated; mean, 95 % CI, paired
 	@set -e; started=$$(date +%s); out=$(abspath $(BASELINES)); \
 	case "$(BASELINE_JOBS)" in ''|*[!0-9]*|0) echo "BASELINE_JOBS=$(BASELINE_JOBS): expected a whole number of at least 1" >&2; exit 2;; esac; \
 	threads=$$(( $$(nproc) / $(BASELINE_JOBS) )); export OMP_NUM_THREADS=$${OMP_NUM_THREADS:-$$(( threads > 0 ? threads : 1 ))}; \
-	parent=$$($(BIN)/python -m prg.commands.baselines parent $$out $(BASELINE_ARGS)); \
+	parent=$$($(BIN)/python -m prg.commands.baselines parent $$out --started $$started $(BASELINE_ARGS)); \
+	trap "$(BIN)/python -m prg.commands.baselines stopped '$$out' --started $$started" EXIT; \
 	PRG_PARENT_RUN_ID=$$parent $(BIN)/prg-train -m \
 		seed=$(BASELINE_SEEDS) model=$(subst $(_space),$(_comma),$(strip $(BASELINE_FAMILIES))) \
 		experiment=quick 'export_dir='$$out'/seed$${seed}/$${model.name}' \

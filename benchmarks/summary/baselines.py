@@ -30,8 +30,10 @@ def baselines_markdown(baselines: Path = BASELINES) -> str:
             "`python benchmarks/summarize.py --snapshot-baselines baselines`."
         )
     agg = read_json(baselines / AGGREGATE)
+    starts = agg.get("starts", 1)
     wall = (
         f"{agg['wall_min']:.1f} min wall on {agg.get('machine', 'this machine')}"
+        + (f" (summed over {starts} starts: stopped and run again)" if starts > 1 else "")
         if agg.get("wall_min") is not None
         else "wall time not recorded"
     )

@@ -4,6 +4,7 @@ baselines`` around its training sweep (families x seeds, quick profile), each sa
 Layout under ``DIR`` (``baselines/``, ignored by git)::
 
     parent.json                          the sweep's MLflow parent run (id, store)
+    starts.json                          each start of the command: when it started and ended
     checkpoints/<family>-seed<s>/        prg-train's checkpoint_dir
     seed<s>/<family>/model.ckpt          prg-train's export_dir (+ metrics.json, history.csv)
     seed<s>/reports/<family>/            prg-evaluate's report_dir (+ timing.json: its CPU and
@@ -12,7 +13,8 @@ Layout under ``DIR`` (``baselines/``, ignored by git)::
     report/                              the aggregate: <table>.md/.csv, comparisons.csv,
                                          index.md, aggregate.json, comparison.png
 
-- ``parent DIR [OVERRIDES]``: open the sweep's parent run in the training experiment (or reuse
+- ``parent DIR [--started EPOCH] [OVERRIDES]``: record the start in ``starts.json``, open the
+  sweep's parent run in the training experiment (or reuse
   the one ``parent.json`` names, when it is in this store) and print its id, for
   ``PRG_PARENT_RUN_ID`` of the ``prg-train -m`` sweep (whose jobs become its children);
 - ``evaluate DIR --families F --seeds S [OVERRIDES]``: one ``prg-evaluate`` per (seed, family),
@@ -22,7 +24,9 @@ Layout under ``DIR`` (``baselines/``, ignored by git)::
 - ``aggregate DIR [--families F --seeds S] [--started EPOCH] [OVERRIDES]``: the reports over
   seeds (:mod:`prg.evaluation.seeds`) into ``DIR/report/``, their metrics
   (``<family>/<metric>/mean``, ``/ci_low``, ``/ci_high``) and files into the parent run, which
-  is then finished.
+  is then finished; the wall time is summed over the command's starts (``starts.json``);
+- ``stopped DIR --started EPOCH``: record the end of a start that did not reach ``aggregate``
+  (``make baselines`` runs it on exit: Ctrl-C, a kill, a failed step).
 
 ``OVERRIDES`` are Hydra overrides of ``prg-evaluate`` (``evaluate``; they win over the
 defaults above) or of the store's config (``paths.root_dir=...``, ``logger.tracking_uri=...``).
@@ -48,6 +52,7 @@ from prg.resources import cpu_name
 PROG = "python -m prg.commands.baselines"
 PARTS = "[likelihood,coherence,likeness]"
 PARENT_FILE = "parent.json"
+STARTS_FILE = "starts.json"
 
 
 # ---- arguments -------------------------------------------------------------------------------
@@ -150,6 +155,54 @@ def log_to_parent(run_id: str, agg: dict, report: Path, overrides: Sequence[str]
     client.set_tag(run_id, "prg.families", " ".join(agg["families"]))
     client.log_artifacts(run_id, str(report), "report")
     client.set_terminated(run_id)
+
+
+# ---- the command's starts ----------------------------------------------------------------
+# A sweep stopped and run again is one piece of work done in several starts: its wall time is
+# the sum of the starts' durations, the time between them (nothing running) left out.
+def read_starts(folder: Path) -> list[dict]:
+    """The recorded starts of the command on ``folder`` (``starts.json``), oldest first."""
+    path = folder / STARTS_FILE
+    return read_json(path, "starts file")["starts"] if path.is_file() else []
+
+
+def record_start(folder: Path, started: float) -> None:
+    """Add the start at ``started`` (epoch seconds) unless it is recorded."""
+    starts = read_starts(folder)
+    if not any(s["started"] == started for s in starts):
+        starts.append({"started": started, "ended": None, "how": None})
+        write_json(folder / STARTS_FILE, {"starts": starts})
+
+
+def record_end(folder: Path, started: float, ended: float, how: str) -> None:
+    """End the start at ``started`` (added when missing) at ``ended``; ``how`` is "aggregated"
+    or "stopped". A start already ended keeps its record (the exit after a finished
+    aggregation is not a stop)."""
+    starts = read_starts(folder)
+    entry = next((s for s in starts if s["started"] == started), None)
+    if entry is None:
+        entry = {"started": started, "ended": None, "how": None}
+        starts.append(entry)
+    if entry["ended"] is None:
+        entry.update(ended=ended, how=how)
+        write_json(folder / STARTS_FILE, {"starts": sorted(starts, key=lambda s: s["started"])})
+
+
+def wall_over_starts(starts: Sequence[dict]) -> tuple[float, int, int]:
+    """(minutes summed over the ended starts, starts, starts without a recorded end)."""
+    ended = [s for s in starts if s["ended"] is not None]
+    minutes = sum(s["ended"] - s["started"] for s in ended) / 60
+    return minutes, len(starts), len(starts) - len(ended)
+
+
+def wall_sentence(minutes: float, n_starts: int, unrecorded: int, machine: str) -> str:
+    """The report's line on how long the command took."""
+    text = f"`make baselines` took {minutes:.1f} min wall on {machine}"
+    if n_starts > 1:
+        text += f", summed over its {n_starts} starts (stopped and run again)"
+    if unrecorded:
+        text += f"; {unrecorded} start(s) killed without a recorded end are not counted"
+    return text + "."
 
 
 # ---- evaluation ------------------------------------------------------------------------------
@@ -307,8 +360,11 @@ def aggregate(
     agg["machine"] = cpu_name()
     wall = ""
     if started is not None:
-        agg["wall_min"] = round((time.time() - started) / 60, 1)
-        wall = f"`make baselines` took {agg['wall_min']:.1f} min wall on {agg['machine']}."
+        record_end(folder, started, time.time(), "aggregated")
+        minutes, n_starts, unrecorded = wall_over_starts(read_starts(folder))
+        agg["wall_min"] = round(minutes, 1)
+        agg["starts"] = n_starts
+        wall = wall_sentence(minutes, n_starts, unrecorded, agg["machine"])
     report = folder / "report"
     with staged_outputs(report) as staging:
         for name, text in seed_report.report_texts(agg, wall).items():
@@ -327,7 +383,8 @@ def main(argv: list[str] | None = None) -> int:
     p = sub.add_parser("parent", help="open (or reuse) the sweep's parent run; print its id")
     e = sub.add_parser("evaluate", help="prg-evaluate each (seed, family) not up to date")
     a = sub.add_parser("aggregate", help="reports over seeds into DIR/report and the parent run")
-    for s in (p, e, a):
+    x = sub.add_parser("stopped", help="record the end of a start that did not aggregate")
+    for s in (p, e, a, x):
         s.add_argument("dir", type=Path, help="the sweep's folder (baselines)")
         s.add_argument("overrides", nargs="*", help="Hydra overrides (key=value), anywhere")
     e.add_argument("--families", required=True, help="e.g. cvae,avae_ts")
@@ -335,7 +392,9 @@ def main(argv: list[str] | None = None) -> int:
     e.add_argument("--jobs", default="1", help="evaluations at once (default 1)")
     a.add_argument("--families", default=None, help="default: every family evaluated")
     a.add_argument("--seeds", default=None, help="default: every seed<s> folder")
-    a.add_argument("--started", type=float, default=None, help="the sweep's start (epoch s)")
+    for s in (p, a):
+        s.add_argument("--started", type=float, default=None, help="this start (epoch s)")
+    x.add_argument("--started", type=float, required=True, help="this start (epoch s)")
     a.add_argument("--no-mlflow", action="store_true", help="write the reports only")
     args, rest = parser.parse_known_args(argv)  # overrides may follow the options too
     try:
@@ -344,7 +403,11 @@ def main(argv: list[str] | None = None) -> int:
         if bad:
             raise UsageError(f"expected Hydra overrides key=value, got {bad[0]!r}")
         if args.step == "parent":
+            if args.started is not None:
+                record_start(args.dir, args.started)
             print(open_parent(args.dir, args.overrides))
+        elif args.step == "stopped":
+            record_end(args.dir, args.started, time.time(), "stopped")
         elif args.step == "evaluate":
             from prg.commands.cli import project_root
 

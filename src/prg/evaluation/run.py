@@ -597,13 +597,15 @@ def run_evaluation(
     result = Evaluation()
     if "likelihood" in settings.parts:
         result.table1 = likelihood_rows(models, test, settings)
-    if "coherence" in settings.parts:
+    if {"coherence", "likeness"} & set(settings.parts):
+        # both parts read with the same two classifiers per modality: loaded (or trained) once
         classifiers = ensure_classifiers(
             data_dir, classifier_dir, settings.classifier, progress=settings.progress
         )
         second = ensure_second_readers(
             data_dir, classifier_dir, classifiers, settings.classifier.seed
         )
+    if "coherence" in settings.parts:
         result.classifiers = classifier_meta(classifier_dir)
         result.classifiers.update({r.name: r.meta for r in second.values()})
         # one seeded subset for every coherence part, so that they share each model's posteriors
@@ -619,12 +621,6 @@ def run_evaluation(
         result.smoothness = roughness_rows(models, data, settings, posteriors)
         result.shifted_images = shifted_image_rows(models, classifiers, data, settings)
     if "likeness" in settings.parts:
-        classifiers = ensure_classifiers(
-            data_dir, classifier_dir, settings.classifier, progress=settings.progress
-        )
-        second = ensure_second_readers(
-            data_dir, classifier_dir, classifiers, settings.classifier.seed
-        )
         result.likeness = likeness_part(
             models, data_dir, classifiers[TRAJ], settings, second[TRAJ].read
         )

@@ -222,6 +222,57 @@ def test_a_recorded_parent_from_another_store_is_not_reused(tmp_path, monkeypatc
     assert json.loads((root / baselines.PARENT_FILE).read_text())["run_id"] == parent
 
 
+def test_the_wall_time_of_a_resumed_sweep_sums_its_starts_not_the_gaps(tmp_path):
+    root = seed_sweep(tmp_path / "b")
+    now = time.time()
+    first, second = now - 3600, now - 600  # 30 min of work, a 20-min gap, then this start
+    baselines.record_start(root, first)
+    baselines.record_start(root, first)  # recorded once
+    baselines.record_end(root, first, first + 1800, "stopped")
+    baselines.record_start(root, second)
+    agg = baselines.aggregate(root, None, None, second, [], log=False)
+    assert agg["starts"] == 2 and agg["wall_min"] == pytest.approx(30 + 10, abs=0.2)
+    starts = baselines.read_starts(root)
+    assert [s["how"] for s in starts] == ["stopped", "aggregated"]
+    # the exit after a finished aggregation is not a stop: the record stays
+    baselines.record_end(root, second, time.time() + 999, "stopped")
+    assert baselines.read_starts(root) == starts
+    assert "over its 2 starts" in (root / "report" / "index.md").read_text()
+
+
+def test_a_start_killed_without_a_record_of_its_end_is_named_not_counted():
+    starts = [
+        {"started": 0.0, "ended": 600.0, "how": "stopped"},
+        {"started": 700.0, "ended": None, "how": None},
+        {"started": 900.0, "ended": 1500.0, "how": "aggregated"},
+    ]
+    minutes, n_starts, unrecorded = baselines.wall_over_starts(starts)
+    assert (minutes, n_starts, unrecorded) == (20.0, 3, 1)
+    text = baselines.wall_sentence(minutes, n_starts, unrecorded, "a CPU")
+    assert "20.0 min" in text and "3 starts" in text and "1 start(s) killed" in text
+    assert "starts" not in baselines.wall_sentence(5.0, 1, 0, "a CPU")
+
+
+def test_make_baselines_records_the_end_of_a_start_that_fails(tmp_path, small_dataset):
+    """A training step that fails (here: a bad override) ends the command; its exit records
+    the start's end, so a later run's wall time counts this start's minutes."""
+    out = tmp_path / "baselines"
+    env = {**os.environ, "PRG_ROOT": str(tmp_path)}
+    env.pop("MLFLOW_TRACKING_URI", None)
+    env.pop("PRG_PARENT_RUN_ID", None)
+    make = [
+        "make", "-s", "-o", "setup", "baselines", f"BASELINES={out}",
+        "BASELINE_SEEDS=0", "BASELINE_FAMILIES=cvae", f"BASELINE_ARGS=paths.data_dir={small_dataset}",
+        "BASELINE_TRAIN_ARGS=trainer.max_epochs=many",
+    ]  # fmt: skip
+    before = time.time()
+    result = subprocess.run(make, cwd=REPO, env=env, capture_output=True, text=True, timeout=300)
+    assert result.returncode != 0
+    [start] = baselines.read_starts(out)
+    assert start["how"] == "stopped" and before - 1 <= start["started"] <= start["ended"]
+    assert start["ended"] <= time.time()
+
+
 @pytest.mark.slow
 def test_make_baselines_end_to_end_on_a_tiny_budget(tmp_path, small_dataset):
     """Two families, two seeds, a few batches: training under one parent, evaluation per
