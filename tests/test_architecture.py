@@ -110,7 +110,6 @@ UNMIRRORED = {
     "prg.tracking.pending": "tested with its package in tests/prg/test_tracking.py",
     "prg.tracking.relocation": "tested with its package in tests/prg/test_tracking.py",
     "prg.tracking.store": "tested with its package in tests/prg/test_tracking.py",
-    "prg.training.callbacks": "training callbacks, run by tests/prg/test_tracking.py",
     "prg.training.generation_figures": "figures logged during training, in tests/prg/test_tracking.py",
     "prg.training.mlflow_logger": "the training logger, run by tests/prg/commands/test_train.py",
     "prg.training.settings": "training settings, composed by tests/prg/commands/test_train.py",

@@ -360,9 +360,17 @@ def _train(cfg: DictConfig, held: ExitStack) -> TrainResult:
         tags=tags,
     )
     callbacks = [_build(c, f"callbacks.{name}") for name, c in cfg.callbacks.items() if c]
-    from prg.training.callbacks import JobIdentity, LastCheckpoint, MLflowRun, best_checkpoint
+    from prg.training.callbacks import (
+        FitTime,
+        JobIdentity,
+        LastCheckpoint,
+        MLflowRun,
+        best_checkpoint,
+    )
 
     callbacks.append(JobIdentity(identity, IDENTITY_KEY))  # what resume=auto matches
+    fit_time = FitTime()
+    callbacks.append(fit_time)
     callbacks.append(
         MLflowRun(
             config_yaml=OmegaConf.to_yaml(cfg, resolve=True),
@@ -377,7 +385,7 @@ def _train(cfg: DictConfig, held: ExitStack) -> TrainResult:
         )
     )
     trainer: L.Trainer = _build(cfg.trainer, "trainer", logger=logger, callbacks=callbacks)
-    cpu_start, wall_start = time.process_time(), time.perf_counter()
+    fit_time.begin()
     with warnings.catch_warnings():
         if trainer.world_size == 1:  # the loader goes on where it stopped, which Lightning
             # cannot see (LastCheckpoint, ResumableSampler): its warning that it does not
@@ -385,10 +393,10 @@ def _train(cfg: DictConfig, held: ExitStack) -> TrainResult:
             warnings.filterwarnings("ignore", "You're resuming from a checkpoint that ended")
         # weights_only: a resumed checkpoint is data, as read_checkpoint already checked it
         trainer.fit(module, datamodule=datamodule, ckpt_path=ckpt_path, weights_only=True)
-    # the cost of this fit (a resumed run counts only its own part): CPU time of all threads
+    # the cost of the fit, CPU time of all threads; a resumed fit's earlier starts included
     metrics = {k: float(v) for k, v in trainer.callback_metrics.items()}
-    metrics["fit_cpu_s"] = time.process_time() - cpu_start
-    metrics["fit_wall_s"] = time.perf_counter() - wall_start
+    metrics["fit_cpu_s"], metrics["fit_wall_s"] = fit_time.elapsed()
+    metrics["fit_starts"] = float(fit_time.starts)
     metrics["epochs"] = float(trainer.current_epoch)
     metrics["steps"] = float(trainer.global_step)
     best = best_checkpoint(trainer)

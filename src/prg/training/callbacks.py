@@ -7,6 +7,7 @@ import logging
 import math
 import os
 import tempfile
+import time
 from pathlib import Path
 from typing import Any
 
@@ -164,6 +165,38 @@ class JobIdentity(L.Callback):
 
     def on_save_checkpoint(self, trainer, pl_module, checkpoint: dict[str, Any]) -> None:
         checkpoint[self.key] = dict(self.identity)
+
+
+class FitTime(L.Callback):
+    """CPU seconds (all threads of the process) and wall seconds of a fit, summed over its
+    starts: the time so far goes into every checkpoint, so a fit resumed from one adds its own
+    time to the earlier starts' time up to that checkpoint (work done after it, lost and done
+    again, counts once). :meth:`begin` starts the clocks, right before ``trainer.fit``."""
+
+    def __init__(self) -> None:
+        self.earlier_cpu_s = self.earlier_wall_s = 0.0
+        self.starts = 1
+        self._clocks = (time.process_time(), time.perf_counter())
+
+    def begin(self) -> None:
+        self._clocks = (time.process_time(), time.perf_counter())
+
+    def elapsed(self) -> tuple[float, float]:
+        """(CPU s, wall s) of the fit so far, earlier starts included."""
+        cpu0, wall0 = self._clocks
+        return (
+            self.earlier_cpu_s + time.process_time() - cpu0,
+            self.earlier_wall_s + time.perf_counter() - wall0,
+        )
+
+    def state_dict(self) -> dict[str, Any]:
+        cpu_s, wall_s = self.elapsed()
+        return {"cpu_s": cpu_s, "wall_s": wall_s, "starts": self.starts}
+
+    def load_state_dict(self, state_dict: dict[str, Any]) -> None:
+        self.earlier_cpu_s = float(state_dict["cpu_s"])
+        self.earlier_wall_s = float(state_dict["wall_s"])
+        self.starts = int(state_dict["starts"]) + 1
 
 
 class SystemMetrics(L.Callback):

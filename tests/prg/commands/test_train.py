@@ -40,7 +40,11 @@ def test_resume_from_last_checkpoint_continues_the_same_run(tmp_path, small_data
     every = "trainer.log_every_n_steps=2"  # 3 batches an epoch: a window spans the resume
     first = train(_cfg(tmp_path, small_dataset, "model=cvae", "trainer.max_epochs=1", every))
     last = tmp_path / "checkpoints/prg/cvae-seed0/last.ckpt"
-    assert torch.load(last, weights_only=False)["mlflow_run_id"] == first.run_id
+    saved = torch.load(last, weights_only=False)
+    assert saved["mlflow_run_id"] == first.run_id
+    earlier = saved["callbacks"]["FitTime"]  # the fit's time up to that checkpoint
+    assert first.metrics["fit_starts"] == 1 and earlier["starts"] == 1
+    assert 0 < earlier["wall_s"] <= first.metrics["fit_wall_s"]
     second = train(
         _cfg(
             tmp_path,
@@ -52,6 +56,10 @@ def test_resume_from_last_checkpoint_continues_the_same_run(tmp_path, small_data
         )
     )
     assert second.run_id == first.run_id
+    # its time: the earlier start's up to the checkpoint, and its own
+    assert second.metrics["fit_starts"] == 2
+    assert second.metrics["fit_wall_s"] > earlier["wall_s"]
+    assert second.metrics["fit_cpu_s"] > earlier["cpu_s"]
     client = _client(tmp_path)
     assert len(client.search_runs([client.get_experiment_by_name("prg").experiment_id])) == 1
     epochs = [m.value for m in client.get_metric_history(first.run_id, "epoch")]
