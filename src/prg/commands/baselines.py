@@ -361,6 +361,7 @@ def aggregate(
     wall = ""
     if started is not None:
         record_end(folder, started, time.time(), "aggregated")
+    if read_starts(folder):  # an aggregation by hand after the sweep keeps its wall time
         minutes, n_starts, unrecorded = wall_over_starts(read_starts(folder))
         agg["wall_min"] = round(minutes, 1)
         agg["starts"] = n_starts

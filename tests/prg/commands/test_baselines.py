@@ -238,6 +238,9 @@ def test_the_wall_time_of_a_resumed_sweep_sums_its_starts_not_the_gaps(tmp_path)
     baselines.record_end(root, second, time.time() + 999, "stopped")
     assert baselines.read_starts(root) == starts
     assert "over its 2 starts" in (root / "report" / "index.md").read_text()
+    # aggregated again by hand (no start of its own): the same wall time
+    again = baselines.aggregate(root, None, None, None, [], log=False)
+    assert again["wall_min"] == agg["wall_min"] and baselines.read_starts(root) == starts
 
 
 def test_a_start_killed_without_a_record_of_its_end_is_named_not_counted():
