@@ -8,6 +8,8 @@ Messages name the culprit and what is accepted.
 
 from __future__ import annotations
 
+import argparse
+
 
 class PRGError(Exception):
     """A failure the user should see as one line (exit code 1)."""
@@ -65,3 +67,11 @@ class SettingsError(UsageError):
     def under(self, prefix: str | None) -> SettingsError:
         """The same error with ``prefix.`` before the field (unchanged for an empty prefix)."""
         return SettingsError(f"{prefix}.{self.field}" if prefix else self.field, self.problem)
+
+
+class UsageParser(argparse.ArgumentParser):
+    """An argparse parser whose errors (a missing or malformed option) raise :class:`UsageError`,
+    so the command's edge prints them as its one line, instead of argparse's usage block."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise UsageError(message)

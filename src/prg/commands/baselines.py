@@ -35,7 +35,6 @@ Bad input: one line, exit 2.
 
 from __future__ import annotations
 
-import argparse
 import os
 import shutil
 import subprocess
@@ -45,7 +44,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from prg.errors import UsageError
+from prg.errors import UsageError, UsageParser
 from prg.files import read_json, staged_outputs, write_json, write_text
 from prg.resources import cpu_name
 
@@ -379,7 +378,7 @@ def aggregate(
 
 # ---- the command line ------------------------------------------------------------------------
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
+    parser = UsageParser(prog=PROG, description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="step", required=True)
     p = sub.add_parser("parent", help="open (or reuse) the sweep's parent run; print its id")
     e = sub.add_parser("evaluate", help="prg-evaluate each (seed, family) not up to date")
@@ -397,8 +396,8 @@ def main(argv: list[str] | None = None) -> int:
         s.add_argument("--started", type=float, default=None, help="this start (epoch s)")
     x.add_argument("--started", type=float, required=True, help="this start (epoch s)")
     a.add_argument("--no-mlflow", action="store_true", help="write the reports only")
-    args, rest = parser.parse_known_args(argv)  # overrides may follow the options too
     try:
+        args, rest = parser.parse_known_args(argv)  # overrides may follow the options too
         args.overrides = [*args.overrides, *rest]
         bad = [o for o in args.overrides if "=" not in o or o.startswith("-")]
         if bad:

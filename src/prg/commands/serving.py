@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 from prg.commands.cli import project_root
-from prg.errors import UsageError
+from prg.errors import UsageError, UsageParser
 from prg.serving import register_version
 from prg.tracking import tracking_uri
 
@@ -21,9 +21,8 @@ def main(argv: list[str] | None = None) -> int:
     exported to ``EXPORT_DIR`` (``models/<family>``: its ``metrics.json`` names the run) as
     ``prg-<family>`` with its training metrics and, given the evaluation's ``metrics.json``
     (``reports/metrics.json``), its coherence and Table I cells."""
-    import argparse
 
-    parser = argparse.ArgumentParser(prog=PROG, description=main.__doc__)
+    parser = UsageParser(prog=PROG, description=main.__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     reg = sub.add_parser("register", help="register an exported model with its metrics")
     reg.add_argument("export_dir", type=Path)
@@ -34,8 +33,8 @@ def main(argv: list[str] | None = None) -> int:
         default=None,
         help="default: MLFLOW_TRACKING_URI, else the project's mlruns.db",
     )
-    args = parser.parse_args(argv)
     try:
+        args = parser.parse_args(argv)
         exported = _read_json(args.export_dir / "metrics.json")
         family, run_id = exported.get("family"), exported.get("mlflow_run_id")
         if not isinstance(family, str) or not isinstance(run_id, str):

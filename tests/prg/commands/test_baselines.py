@@ -174,6 +174,10 @@ def test_a_failed_evaluation_lets_the_running_one_finish_and_starts_no_more(tmp_
         (["aggregate", "{b}", "notanoverride"], "key=value"),
         (["aggregate", "{b}", "--families", "cvae", "--seeds", "7", "--no-mlflow"], "seed7"),
         (["evaluate", "{b}", "--families", "cvae", "--seeds", "0", "--jobs", "0"], "--jobs"),
+        (["evaluate", "{b}", "--seeds", "0"], "--families"),  # argparse's own checks too
+        (["stopped", "{b}"], "--started"),
+        (["stopped", "{b}", "--started", "noon"], "'noon'"),
+        (["restart", "{b}"], "restart"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, argv, expected):

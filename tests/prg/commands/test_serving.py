@@ -16,3 +16,9 @@ def test_register_refuses_a_folder_that_is_no_export_in_one_line(tmp_path, capsy
     )
     (line,) = capsys.readouterr().out.strip().splitlines()
     assert "expected the family and mlflow_run_id of a prg-train export" in line
+
+
+def test_a_missing_argument_is_one_line_and_exit_2(capsys):
+    assert main(["register"]) == 2
+    (line,) = capsys.readouterr().out.strip().splitlines()
+    assert "export_dir" in line

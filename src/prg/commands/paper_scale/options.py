@@ -10,17 +10,12 @@ from __future__ import annotations
 import argparse
 
 from prg.checks import FAMILIES, PAPER_FAMILIES
-from prg.errors import UsageError
+from prg.errors import UsageError, UsageParser
 
 __all__ = ["COMMAND", "PROFILES", "build_parser", "parse_args"]
 
 COMMAND = "prg.commands.paper_scale"
 PROFILES = ("paper", "converged")
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # one line, exit 2 (argparse prints usage too)
-        raise UsageError(message)
 
 
 def _number(text: str) -> int | float:
@@ -44,7 +39,7 @@ def _positive_int(text: str) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(
+    p = UsageParser(
         prog=f"python -m {COMMAND}",
         description="Train the four families at the paper's settings concurrently on one GPU, "
         "then evaluate them at the paper's K, into their own folder (make paper).",
