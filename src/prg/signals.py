@@ -45,12 +45,36 @@ def stop_children(timeout: float = 5.0) -> None:
             child.join(1.0)
 
 
+def _hung_up(args: threading.ExceptHookArgs) -> bool:
+    """Whether a thread's uncaught exception is a peer hanging up (a connection reset or
+    closed): what multiprocessing's file-descriptor sharing thread meets when a DataLoader
+    worker it is handing a tensor to is stopped with the process."""
+    return issubclass(args.exc_type, ConnectionError | EOFError)
+
+
+def _quiet_hang_ups() -> None:
+    """From now until :func:`raising_signals` ends: a thread's hang-up is dropped rather than
+    printed as a traceback under the command's one line (every other exception still is)."""
+    previous = threading.excepthook
+    if getattr(previous, "prg_quiet", False):
+        return
+
+    def hook(args: threading.ExceptHookArgs) -> None:
+        if not _hung_up(args):
+            previous(args)
+
+    hook.prg_quiet = True  # type: ignore[attr-defined]
+    hook.previous = previous  # type: ignore[attr-defined]
+    threading.excepthook = hook
+
+
 def _on_signal(signum, frame) -> None:
     if getattr(_state, "depth", 0):
         _state.pending = signum  # raised when the deferred step ends
         return
     for sig in HANDLED_SIGNALS:
         signal.signal(sig, _exit_now)
+    _quiet_hang_ups()  # the workers stop with us, some mid-handshake
     raise Interrupted(signum)
 
 
@@ -101,6 +125,8 @@ def raising_signals() -> Iterator[None]:
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+        if getattr(threading.excepthook, "prg_quiet", False):
+            threading.excepthook = threading.excepthook.previous  # type: ignore[attr-defined]
 
 
 __all__ = [

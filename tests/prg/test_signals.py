@@ -36,3 +36,44 @@ def test_a_signal_outside_a_deferred_step_is_raised_at_once():
         for _ in range(1000):
             steps.append(1)
     assert len(steps) < 1000
+
+
+def _thread_raising(error: BaseException) -> None:
+    import threading
+
+    def run():
+        raise error
+
+    thread = threading.Thread(target=run)
+    thread.start()
+    thread.join()
+
+
+def test_once_stopping_a_threads_hang_up_is_quiet_and_other_errors_are_not(monkeypatch):
+    import threading
+
+    seen = []  # what reaches the hook in place before (Python's prints a traceback)
+    monkeypatch.setattr(threading, "excepthook", lambda args: seen.append(args.exc_type))
+    before = threading.excepthook
+    with raising_signals(), pytest.raises(Interrupted):
+        _thread_raising(ConnectionResetError(104, "Connection reset by peer"))
+        assert seen == [ConnectionResetError]  # not stopping yet: it goes through
+        os.kill(os.getpid(), signal.SIGTERM)
+        for _ in range(1000):
+            pass
+    # the stop left the quiet hook in place until the block's end; the old one is back after
+    assert threading.excepthook is before
+    seen.clear()
+    stopped = False
+    with raising_signals():
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)
+            for _ in range(10**6):  # the handler runs between bytecodes, well before the end
+                pass
+        except Interrupted:  # while the stop unwinds, as multiprocessing's sharer thread meets it
+            stopped = True
+            _thread_raising(ConnectionResetError(104, "Connection reset by peer"))
+            _thread_raising(BrokenPipeError(32, "Broken pipe"))
+            _thread_raising(EOFError())
+            _thread_raising(ValueError("a real bug"))
+    assert stopped and seen == [ValueError]
