@@ -360,8 +360,9 @@ def aggregate(
     wall = ""
     if started is not None:
         record_end(folder, started, time.time(), "aggregated")
-    if read_starts(folder):  # an aggregation by hand after the sweep keeps its wall time
-        minutes, n_starts, unrecorded = wall_over_starts(read_starts(folder))
+    starts = read_starts(folder)
+    if starts:  # an aggregation by hand after the sweep keeps its wall time
+        minutes, n_starts, unrecorded = wall_over_starts(starts)
         agg["wall_min"] = round(minutes, 1)
         agg["starts"] = n_starts
         wall = wall_sentence(minutes, n_starts, unrecorded, agg["machine"])
