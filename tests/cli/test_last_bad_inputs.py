@@ -97,8 +97,8 @@ def test_a_text_file_named_mp3_gets_no_decoder_lines(tmp_path, untrained_muse_ch
 @pytest.mark.parametrize(
     "args, expected",
     [
-        (["--cfg", "job", "seed=["], "no viable alternative at input '['"),
-        (["-m", "seed=0,1", "model=["], "no viable alternative at input '['"),
+        (["--cfg", "job", "seed=["], "cannot read seed=[: no viable alternative at input '['"),
+        (["-m", "seed=0,1", "model=["], "cannot read model=[: no viable alternative at input"),
         (["--multirun", "model=cvae,musee"], "unknown model musee; accepted: "),
         (["--cfg", "job", "nosuchkey=1"], "unknown key nosuchkey; accepted top-level keys"),
         (["--cfg", "job", "data=nope"], "unknown data nope; accepted: synthetic, uji"),

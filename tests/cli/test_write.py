@@ -156,7 +156,10 @@ def test_audio_channel_speech_to_word_with_recording(tmp_path, checkpoint):
     "args, expected",
     [
         (["text=h@llo"], "unsupported characters '@'"),  # from the task
-        (["text=héllo, wörld!"], "needs Hydra quotes"),  # from Hydra's override grammar
+        (  # from Hydra's override grammar, the override named
+            ["text=héllo, wörld!"],
+            "cannot read text=héllo, wörld!: token recognition error at: 'é'; a value with",
+        ),
     ],
 )
 def test_the_command_prints_one_line_and_exits_2(tmp_path, checkpoint, args, expected):

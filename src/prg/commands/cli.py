@@ -425,24 +425,84 @@ def _sweep_variants(command: str, overrides: list[str]) -> list[list[str]]:
 _MISSING_OPTION = re.compile(
     r"Could not find '(.+)/([^/']+)' Available options in '[^']*': (.*?)(?: Config search path|$)"
 )
+# Hydra's message for a config group the command does not have (``prg-write model=muse``)
+_NOT_A_GROUP = re.compile(r"^Could not override '([^']+)'\. No match in the defaults list")
 
 
-def _composition_error(err: Exception, config_name: str, overrides: list[str]) -> str:
-    """One line for a command line that does not compose: an unknown key (with the accepted
-    ones), an unknown option of a config group (with the options), or Hydra's own message."""
+def _unknown_override(err: Exception) -> str | None:
+    """The key of an override that names nothing in the config, when that is why Hydra failed."""
     from omegaconf.errors import OmegaConfBaseException
 
     message = " ".join(str(err).split())
+    group = _NOT_A_GROUP.match(message)
+    if group:
+        return group.group(1)
     cause = err.__cause__
     if message.startswith("Could not override") and isinstance(cause, OmegaConfBaseException):
-        key = cause.full_key  # the unknown key; Hydra's advice (+key=) would add an unused one
-        others = [o for o in overrides if o.partition("=")[0] != key]
+        return cause.full_key or None
+    return None
+
+
+def _unreadable_override(overrides: list[str]) -> str | None:
+    """The line for the first override Hydra's grammar cannot read, naming it and why (Hydra's
+    message for a whole command line names neither)."""
+    from hydra.core.override_parser.overrides_parser import OverridesParser
+    from hydra.errors import HydraException
+
+    parser = OverridesParser.create()
+    for override in overrides:
         try:
-            known = OmegaConf.to_container(compose_config(config_name, others))
-        except Exception:  # another override is bad too: Hydra's message
-            known = None
-        if key and isinstance(known, dict):
-            return unknown_key(key, known)
+            parser.parse_override(override)
+        except HydraException as err:
+            reason = " ".join(str(err).split())
+            cut = reason.find(" expecting {")  # the grammar's whole list of tokens
+            reason = reason[:cut] if cut > 0 else reason
+            return (
+                f"cannot read {override}: {reason}; a value with spaces, commas or symbols needs"
+                """ quotes: 'key="..."'"""
+            )
+    return None
+
+
+def _key_of(override: str) -> str:
+    return override.lstrip("+~").partition("=")[0]
+
+
+def _composition_error(err: Exception, config_name: str, overrides: list[str]) -> str:
+    """One line for a command line that does not compose: the unknown keys (with the accepted
+    ones), an unknown option of a config group (with the options), or Hydra's own message."""
+    unreadable = _unreadable_override(overrides)
+    if unreadable:
+        return unreadable
+    message = " ".join(str(err).split())
+    # Hydra stops at the first unknown key (advising +key=, which would add an unused one): drop
+    # each unknown key in turn until the rest composes, so that the line names them all and
+    # lists what is accepted where the first was given
+    unknown: list[str] = []
+    failure: Exception | None = err
+    while failure is not None and len(unknown) < len(overrides):
+        key = _unknown_override(failure)
+        if key is None:
+            break
+        unknown.append(key)
+        rest = [o for o in overrides if _key_of(o) not in unknown]
+        try:
+            known = OmegaConf.to_container(compose_config(config_name, rest))
+            failure = None
+        except Exception as again:  # Hydra raises several types
+            failure = again
+    if unknown:
+        if failure is not None:  # the rest fails for another reason too
+            return f"{_composition_error(failure, config_name, rest)} (also unknown: {', '.join(unknown)})"
+        line = unknown_key(unknown[0], known)
+        if len(unknown) > 1:
+            line += f" (also unknown: {', '.join(unknown[1:])})"
+        variables = [k for k in unknown if k.isupper()]
+        if variables:
+            line += (
+                f"; {variables[0]} looks like an environment variable: put it before the command"
+            )
+        return line
     group = _MISSING_OPTION.search(message)
     if group:
         options = [o for o in group.group(3).split() if not o.startswith("_")]  # _base_ files
@@ -451,8 +511,6 @@ def _composition_error(err: Exception, config_name: str, overrides: list[str]) -
     message = (message[:cut] if cut > 0 else message).strip()
     cut = message.find(" See https://hydra.cc/docs/")  # the grammar's page, after the reason
     message = message[:cut] if cut > 0 else message
-    if "LexerNoViableAlt" in message or "mismatched input" in message:
-        message += " (a value with spaces, commas or symbols needs Hydra quotes: 'key=\"...\"')"
     return message
 
 
