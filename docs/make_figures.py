@@ -26,7 +26,7 @@ CKPT = ROOT / "models" / "muse" / "model.ckpt"
 OUT = ROOT / "docs" / "figures"
 WORD, ROBOT_WORD, SCALE = "jelly", "joy", 6.0  # SCALE: the robot's word, enlarged to be seen
 EYE, TARGET = (-0.4, 1.0, 1.45), (0.42, 0.02, 0.85)  # world (m): the arm, table and page
-CLOSE_EYE, CLOSE_TARGET = (0.31, 0.11, 0.82), (0.55, -0.01, 0.6255)  # the page, near the pen
+CLOSE_EYE, CLOSE_TARGET = (0.31, 0.15, 0.82), (0.55, 0.03, 0.6255)  # the page, the whole word
 LIGHT, SUPERSAMPLE, INK_MM = (-0.2, 0.5, 1.0), 2, 3.5  # ink drawn wide to show at this size
 
 
@@ -144,7 +144,8 @@ def marks_figure(writer, path: Path) -> str:
 
 
 def robot_figure(writer, cfg, path: Path) -> str:
-    """The Panda near the end of ``ROBOT_WORD``: a 3/4 view and, inset, a close-up of the page."""
+    """The Panda putting the last ink of ``ROBOT_WORD`` on the page (the j's dot, written after
+    the word, so the whole word reads): a 3/4 view and, inset, a close-up of the page."""
     from PIL import Image
 
     from prg.commands.settings import simulation_settings
@@ -155,14 +156,11 @@ def robot_figure(writer, cfg, path: Path) -> str:
     robot, settings = simulation_settings(cfg)
     word = writer.write(text=ROBOT_WORD).word
     result = simulate_word(word, robot, settings, render=False)
-    inked = np.flatnonzero(result.contact)
-    step = inked[int(0.9 * (len(inked) - 1))]  # pen down, 90 % of the ink on the page
-    contact = result.contact.copy()
-    contact[step + 1 :] = False
+    step = np.flatnonzero(result.contact)[-1]  # the pen down on the last ink sample
     # every 6th ink sample: PIL's wide lines get ragged over many sub-pixel segments
     strokes = [
         np.vstack([result.tip_paper[a:b:6, :2], result.tip_paper[b - 1, :2]])
-        for a, b in runs(contact)
+        for a, b in runs(result.contact)
     ]
     w, h = settings.paper.size_cm
     page = draw_strokes(strokes, (-w / 2, -h / 2), (round(w * 40), round(h * 40)), 40, INK_MM)
@@ -183,8 +181,9 @@ def robot_figure(writer, cfg, path: Path) -> str:
     m = result.metrics
     return (
         f'The simulated Franka Panda (PyBullet, TinyRenderer) writing "{ROBOT_WORD}" from the demo '
-        f"MUSE at {SCALE:g}x its size ({m['word_width_cm']:.1f} x {m['word_height_cm']:.1f} cm); "
-        f"inset: the page near the pen (ink drawn {INK_MM} mm wide). Tracking error mean "
+        f"MUSE at {SCALE:g}x its size ({m['word_width_cm']:.1f} x {m['word_height_cm']:.1f} cm), "
+        "as it puts the last ink on the page (the j's dot, written after the word); "
+        f"inset: the page and the pen (ink drawn {INK_MM} mm wide). Tracking error mean "
         f"{m['tracking_error_mean_mm']:.3f} mm, max {m['tracking_error_max_mm']:.3f} mm."
     )
 
