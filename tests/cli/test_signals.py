@@ -321,3 +321,26 @@ def test_a_signal_during_config_composition_waits_for_the_task(monkeypatch, caps
     assert stopped.value.code == 128 + signal.SIGTERM
     assert ran == ["preflight went on"]  # held through the composition, raised before the task
     assert "stopped by SIGTERM" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "argv", [["prg-evaluate", "--help"], ["prg-study", "power", "turing"]], ids=["hydra", "study"]
+)
+def test_a_reader_that_goes_away_ends_the_command_quietly_as_sigpipe_would(tmp_path, argv):
+    """``prg-evaluate --help | head -1``: the pipe's reader is gone before the command writes."""
+    read_end, write_end = os.pipe()
+    os.close(read_end)  # no reader: the command's first write fails with EPIPE
+    try:
+        result = subprocess.run(
+            [str(BIN / argv[0]), *argv[1:]],
+            stdout=write_end,
+            stderr=subprocess.PIPE,
+            text=True,
+            cwd=tmp_path,
+            env={**os.environ, "PRG_ROOT": str(tmp_path)},
+            timeout=120,
+        )
+    finally:
+        os.close(write_end)
+    assert result.returncode == 128 + signal.SIGPIPE, result.stderr[-2000:]
+    assert result.stderr == ""  # no traceback, no line: a shell tool says nothing either

@@ -95,6 +95,40 @@ def test_help_says_what_the_command_does_its_options_and_an_example_that_compose
         assert known or key in groups or OmegaConf.select(cfg, parent) is not None, key
 
 
+def _accepted(module: str, name: str) -> list[str]:
+    import importlib
+
+    return list(getattr(importlib.import_module(module), name))
+
+
+@pytest.mark.parametrize(
+    "command, listed, accepted",
+    [
+        ("prg-write", "family=", FAMILIES),
+        ("prg-write", "generate.mode=", ("prg.pipeline.settings", "DECODING_MODES")),
+        ("prg-write", "generate.method=", ("prg.pipeline.settings", "CONNECTION_METHODS")),
+        ("prg-write", "generate.timing=", ("prg.pipeline.settings", "TIMINGS")),
+        ("prg-write", "speech.backend=", ("prg.pipeline.speech.settings", "BACKENDS")),
+        ("prg-evaluate", "parts=[", ("prg.evaluation.settings", "PARTS")),
+    ],
+    ids=lambda value: value if isinstance(value, str) else None,
+)
+def test_help_lists_the_accepted_values_of_its_choices(
+    command, listed, accepted, monkeypatch, capfd, restore_logging, tmp_path
+):
+    """A choice the help spells out (``generate.method=hand|alg1|straight``) names exactly the
+    values the command accepts, so a new value cannot go unmentioned (``parts``: the reports;
+    training the classifiers is said in words)."""
+    monkeypatch.setenv("PRG_ROOT", str(tmp_path))
+    text = _help_of(command, monkeypatch, capfd)
+    values = re.search(rf"(?:^|[\s(]){re.escape(listed)}([\w|,]+)", text).group(1)
+    names = re.split(r"[|,]", values)
+    expected = list(FAMILIES) if accepted is FAMILIES else _accepted(*accepted)
+    if listed == "parts=[":
+        expected.remove("classifiers")
+    assert names == expected
+
+
 @pytest.mark.parametrize("command", [c for c in HYDRA_COMMANDS if c != "prg-write"])
 def test_every_command_answers_a_typo_before_importing_its_task(tmp_path, command):
     """The console scripts are made in prg.commands.entry, which names each task by its module:

@@ -36,6 +36,7 @@ import errno
 import logging
 import os
 import re
+import signal
 import sys
 import tempfile
 from collections.abc import Callable, Iterator
@@ -518,7 +519,9 @@ def _composition_error(err: Exception, config_name: str, overrides: list[str]) -
 def handle_signals(command: str) -> Iterator[None]:
     """Turn SIGINT, SIGTERM and SIGHUP inside the block into one line and exit code 128 + signal.
 
-    Only in the main thread (Python delivers signals there); see :mod:`prg.signals`.
+    Only in the main thread (Python delivers signals there); see :mod:`prg.signals`. A reader
+    of the standard output that goes away (``prg-evaluate --help | head -1``) ends the command
+    as SIGPIPE ends a shell tool: quietly, exit code 128 + 13.
     """
     with raising_signals():
         try:
@@ -530,6 +533,10 @@ def handle_signals(command: str) -> Iterator[None]:
                 f"stopped by {err}; the outputs of earlier runs are left as they were",
                 128 + err.signum,
             )
+        except BrokenPipeError:
+            # the interpreter flushes stdout again at exit: point it at /dev/null first
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            raise SystemExit(128 + signal.SIGPIPE) from None
 
 
 def end_process(code: int) -> NoReturn:
