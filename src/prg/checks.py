@@ -17,8 +17,9 @@ class checks against a named constant here (a top-level key read by several comm
 holding several numbers, checked item by item). The declaring settings modules import no numpy,
 so the check still runs before any heavy library is loaded.
 
-:data:`CHOICES` holds the options that name one of a fixed set (``family``: :data:`FAMILIES`),
-checked by :func:`check_values` too, and :func:`unknown_key` is the line for an option the
+:data:`CHOICES` holds the options that name one of a fixed set (``family``: :data:`FAMILIES`;
+``generate.method``: the constant :data:`DECLARED_CHOICES` names, built on first use like
+:data:`RANGES`), checked by :func:`check_values` too, and :func:`unknown_key` is the line for an option the
 config does not have (with the closest keys and the keys accepted there). The command runner
 (:mod:`prg.commands.cli`) runs these checks on the composed command line before any heavy
 library is imported.
@@ -272,11 +273,25 @@ TABLE: dict[str, Range] = {
 # make paper / make converged), then the baselines
 PAPER_FAMILIES = ("cvae", "avae_ts", "avae_ti", "muse")
 FAMILIES = (*PAPER_FAMILIES, "mvae", "mmvae", "mopoe")
-CHOICES: dict[str, tuple[str, tuple[str, ...]]] = {  # key -> (what a value is, accepted values)
+TABLE_CHOICES: dict[str, tuple[str, tuple[str, ...]]] = {  # key -> (what a value is, accepted)
     "family": ("family", FAMILIES),  # prg-write, prg-dictaphone, prg-simulate
     "families": ("family", FAMILIES),  # prg-evaluate (a list)
     "resume": ("resume mode", ("sweep", "auto", "never")),  # prg-train (prg.commands.train)
 }
+DECLARED_CHOICES: dict[str, tuple[str, str, str]] = {  # key -> (what, module, its constant)
+    "generate.mode": ("decoding mode", "prg.pipeline.settings", "DECODING_MODES"),
+    "generate.method": ("connection method", "prg.pipeline.settings", "CONNECTION_METHODS"),
+    "generate.timing": ("timing", "prg.pipeline.settings", "TIMINGS"),
+}  # speech.backend is checked by its task: importing prg.pipeline.speech loads numpy
+
+
+@functools.cache
+def _choices() -> dict[str, tuple[str, tuple[str, ...]]]:
+    declared = {
+        key: (what, tuple(getattr(importlib.import_module(module), name)))
+        for key, (what, module, name) in DECLARED_CHOICES.items()
+    }
+    return TABLE_CHOICES | declared
 
 
 @functools.cache
@@ -292,6 +307,8 @@ def _ranges() -> dict[str, Range]:
 def __getattr__(name: str) -> Any:
     if name == "RANGES":  # built on first use: the settings modules import this one
         return _ranges()
+    if name == "CHOICES":  # the same
+        return _choices()
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
@@ -380,8 +397,9 @@ def check_values(cfg: Any) -> None:
     :data:`CHOICES` must name one of their accepted values, those of :data:`FOLDER_NAMES` a
     plain folder name.
     """
+    choices = _choices()
     for key, value in leaves(_plain(cfg)):
-        if key in CHOICES:
+        if key in choices:
             check_choice(value, key)
             continue
         if key in FOLDER_NAMES:
@@ -404,7 +422,7 @@ def check_values(cfg: Any) -> None:
 def check_choice(value: Any, key: str) -> None:
     """Refuse a value of the option ``key`` (:data:`CHOICES`; each item of a list) that is not
     one of its accepted values: ``unknown family musee; accepted: cvae, avae_ts, avae_ti, muse``."""
-    what, accepted = CHOICES[key]
+    what, accepted = _choices()[key]
     for item in value if isinstance(value, list | tuple) else [value]:
         if item not in accepted:
             where = f" in {key}={_short(value)}" if isinstance(value, list | tuple) else ""

@@ -33,9 +33,19 @@ def imported_modules(stderr: str) -> set[str]:
             "prg-write: error: unknown family musee; accepted: cvae, avae_ts, avae_ti, muse",
         ),
         (["generate.temperature=-1"], "prg-write: error: generate.temperature must be"),
+        (
+            ["text=hi", "generate.method=curvy"],
+            "prg-write: error: unknown connection method curvy; accepted: hand, alg1, straight",
+        ),
         (["--help"], None),
     ],
-    ids=["unknown-key", "unknown-family", "out-of-range", "help"],
+    ids=[
+        "unknown-key",
+        "unknown-family",
+        "out-of-range",
+        "unknown-method",
+        "help",
+    ],
 )
 def test_prg_write_answers_before_importing_torch_and_writes_nothing(tmp_path, args, expected):
     env = {"PYTHONPROFILEIMPORTTIME": "1", "PRG_ROOT": str(tmp_path / "root")}
