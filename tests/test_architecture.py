@@ -10,7 +10,7 @@ from tests.conftest import REPO
 
 SRC = REPO / "src" / "prg"
 COMMANDS = SRC / "commands"
-SHARED = {"cli", "settings", "entry"}  # the command layer's plumbing, not commands
+SHARED = {"cli", "preflight", "settings", "entry"}  # the command layer's plumbing, not commands
 
 
 def imported_modules(path: Path) -> set[str]:

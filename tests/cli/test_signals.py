@@ -306,6 +306,7 @@ def test_a_signal_during_config_composition_waits_for_the_task(monkeypatch, caps
     """A signal that lands while Hydra composes the config is held (OmegaConf's cleanup code can
     swallow an exception raised inside it) and stops the command as the task starts."""
     from prg.commands import cli
+    from prg.commands import preflight as checks_first
 
     ran = []
 
@@ -313,7 +314,7 @@ def test_a_signal_during_config_composition_waits_for_the_task(monkeypatch, caps
         os.kill(os.getpid(), signal.SIGTERM)  # arrives inside the composition
         ran.append("preflight went on")
 
-    monkeypatch.setattr(cli, "_preflight", preflight)
+    monkeypatch.setattr(checks_first, "preflight", preflight)
     monkeypatch.setattr(sys, "argv", ["prg-write", f"hydra.run.dir={tmp_path}/logs"])
     main = cli.hydra_command(lambda cfg: ran.append("task ran"), "write", "prg-write")
     with pytest.raises(SystemExit) as stopped:

@@ -23,7 +23,7 @@ BAD = [
     (["text='@!'", "on_unknown=skip"], "no letters to write"),
     (["text=hi", "on_unknown=ignore"], "error or skip"),
     (["text=hi", "ckpt={tmp}/none.ckpt"], "does not exist"),
-    (["text=hi", "generate.method=zigzag"], "hand, alg1 or straight"),
+    (["text=hi", "generate.method=zigzag"], "connection method zigzag; accepted: hand, alg1,"),
     (["text=hi", "generate.speed_cm_s=-1"], "speed"),
     (["text=hi", "audio={tmp}/silence.wav"], "give one of them"),
     (["audio={tmp}/none.wav"], "none.wav"),
