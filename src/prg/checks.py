@@ -21,7 +21,7 @@ so the check still runs before any heavy library is loaded.
 ``generate.method``: the constant :data:`DECLARED_CHOICES` names, built on first use like
 :data:`RANGES`), checked by :func:`check_values` too, and :func:`unknown_key` is the line for an option the
 config does not have (with the closest keys and the keys accepted there). The command runner
-(:mod:`prg.commands.cli`) runs these checks on the composed command line before any heavy
+(:mod:`prg.commands.preflight`) runs these checks on the composed command line before any heavy
 library is imported.
 
 :func:`require_number` is the same check for one value (for settings read outside the config);

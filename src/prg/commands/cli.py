@@ -1,7 +1,7 @@
 """Thin Hydra entry points with one-line errors.
 
 Every ``prg-*`` command is ``hydra_command(task, config_name, command)``. Before Hydra runs, the
-command line is composed once against ``conf/`` so that an unknown config group, a typo in a key
+command line is composed once against ``conf/`` (:mod:`prg.commands.preflight`) so that an unknown config group, a typo in a key
 or a malformed override is reported as one line with exit code 2 instead of Hydra's multi-line
 message, and so is an interpolation that cannot be resolved (``${oc.env:NOPE}``); Hydra's log
 folder (``paths.log_dir``) is checked there too. Each task then checks its numeric options
