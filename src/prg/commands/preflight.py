@@ -237,13 +237,15 @@ def composition_error(err: Exception, config_name: str, overrides: list[str]) ->
     # each unknown key in turn until the rest composes, so that the line names them all and
     # lists what is accepted where the first was given
     unknown: list[str] = []
+    rest = list(overrides)
     failure: Exception | None = err
-    while failure is not None and len(unknown) < len(overrides):
+    while failure is not None:
         key = _unknown_override(failure)
-        if key is None:
-            break
+        kept = [o for o in rest if _key_of(o) != key]
+        if key is None or len(kept) == len(rest):
+            break  # not an unknown key, or one no override names as such: Hydra's message
         unknown.append(key)
-        rest = [o for o in overrides if _key_of(o) not in unknown]
+        rest = kept
         try:
             known = OmegaConf.to_container(compose_config(config_name, rest))
             failure = None

@@ -66,3 +66,13 @@ def test_an_override_the_grammar_cannot_read_is_named_with_the_reason(override, 
     line = line_for("write", ["text=fine", override])
     assert line.startswith(f"cannot read {override}: {reason}")
     assert "expecting {" not in line  # not the grammar's list of every token
+
+
+def test_an_unknown_key_no_override_names_ends_in_hydras_message():
+    """A failure about a key the overrides do not spell the same way (nothing to drop) is
+    answered with Hydra's own line, not looped on."""
+    from hydra.errors import ConfigCompositionException
+
+    err = ConfigCompositionException("Could not override 'nowhere'. No match in the defaults list.")
+    line = composition_error(err, "write", ["text=hi", "colr=1"])
+    assert line == "Could not override 'nowhere'. No match in the defaults list."
