@@ -85,14 +85,15 @@ def measure(args) -> list[dict]:
     def classify(letters: np.ndarray) -> np.ndarray:
         return predict(classifier, torch.from_numpy(letters)).numpy()
 
-    real = by_class(*originals(load_split(args.data / "test.npz"))[:2])
+    splits = {s: originals(load_split(args.data / f"{s}.npz")) for s in ("test", "val", "train")}
+    real = by_class(*splits["test"][:2])
     fewest = min(len(letters) for letters in real.values())
     if fewest <= K:
         raise UsageError(
             f"{args.data / 'test.npz'}: a class has {fewest} test letters; the k-NN measures"
             f" need more than k = {K} (a dataset with more test writers)"
         )
-    names = sorted(set(fonts.values()), key=list(fonts.values()).index)
+    names = list(dict.fromkeys(fonts.values()))  # the fonts in the generator's order
     rows: list[dict] = []
     print("| letters | writers | font | n writers | legible | precision | recall | c2st |")
     print("|---|---|---|---|---|---|---|---|")
@@ -108,18 +109,18 @@ def measure(args) -> list[dict]:
             flush=True,
         )
 
-    for split in ("test", "val", "train"):
-        traj, labels, writers = originals(load_split(args.data / f"{split}.npz"))
+    for split, (traj, labels, writers) in splits.items():
         font_of = np.array([fonts[w] for w in writers])
         for font in [*names, "all"]:
             keep = font_of == font if font != "all" else np.ones(len(writers), bool)
             n_writers = len(set(writers[keep]))
-            if split == "test" or n_writers == 0:  # the test writers: counted, not scored
-                if split == "test":
-                    rows.append(
-                        {"letters": "real", "writers": split, "font": font, "n_writers": n_writers}
-                    )
-                    print(f"| real (the reference) | test | {font} | {n_writers} | | | | |")
+            if split == "test":  # the reference: counted, not scored
+                rows.append(
+                    {"letters": "real", "writers": split, "font": font, "n_writers": n_writers}
+                )
+                print(f"| real (the reference) | test | {font} | {n_writers} | | | | |")
+                continue
+            if n_writers == 0:
                 continue
             try:
                 scores = [

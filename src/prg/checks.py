@@ -19,8 +19,8 @@ so the check still runs before any heavy library is loaded.
 
 :data:`CHOICES` holds the options that name one of a fixed set (``family``: :data:`FAMILIES`;
 ``generate.method``: the constant :data:`DECLARED_CHOICES` names, built on first use like
-:data:`RANGES`), checked by :func:`check_values` too, and :func:`unknown_key` is the line for an option the
-config does not have (with the closest keys and the keys accepted there). The command runner
+:data:`RANGES`), checked by :func:`check_values` too, and :func:`unknown_key` is the line for an
+option the config does not have (with the closest keys and the keys accepted there). The runner
 (:mod:`prg.commands.preflight`) runs these checks on the composed command line before any heavy
 library is imported.
 

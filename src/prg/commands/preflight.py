@@ -51,10 +51,9 @@ def _unresolvable(cfg: Any, overrides: list[str]) -> str | None:
     """One line for the first interpolation of ``cfg`` that cannot be resolved (``${oc.env:NOPE}``,
     ``${no.such.key}``), None if all resolve. The keys the user set are tried first, so the line
     names the option given rather than another that interpolates it."""
-    from omegaconf import OmegaConf
     from omegaconf.errors import OmegaConfBaseException
 
-    given = [o.partition("=")[0].lstrip("+~") for o in overrides if "=" in o]
+    given = [_key_of(o) for o in overrides if "=" in o]
     rest = [k for k in cfg if k != "hydra"]
     for key in [*given, *rest, "hydra.run.dir"]:
         try:
