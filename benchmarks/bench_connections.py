@@ -7,9 +7,12 @@ reference; ``straight``) in both decodings (``hand``: letters in the hand of eac
 ``posterior``: the paper's posterior mean), and every connection is checked with
 :func:`prg.pipeline.joins.ink_crossings` (a proper crossing of a letter's ink more than 1 mm from
 the connection's ends). Reported per method and decoding: connections that cross, words with at
-least one, the connections' length over the straight distance, and the median time to compose a
-word (layout, connections, DMP), each beside Algorithm 1's as a ratio. Target: at most 10 % of
-connections crossing ink with the default method.
+least one, connections that loop (cross themselves, :func:`prg.pipeline.joins.self_crossings`)
+or swing above or below both letters they join by more than an arch's clearance
+(:func:`prg.pipeline.joins.overshoot`), pen lifts between letters, the connections' length over
+the straight distance, and the median time to compose a word (layout, connections, DMP), each
+beside Algorithm 1's as a ratio. Target: at most 10 % of connections crossing ink with the
+default method.
 
 Usage: ``python benchmarks/bench_connections.py`` (needs ``models/muse/model.ckpt``: ``make
 demo``). Prints a table and writes ``benchmarks/results/bench_connections.json``.
@@ -99,9 +102,9 @@ METHODS = ("hand", "alg1", "straight")
 DECODINGS = ("hand", "posterior")
 
 
-def word_connections(word) -> list[tuple[np.ndarray, list[np.ndarray]]]:
+def word_connections(word) -> list[tuple[np.ndarray, list[np.ndarray], tuple]]:
     """Each connection of a written word as its full path (from the end of one letter to the
-    start of the next), with the word's letters."""
+    start of the next), with the word's letters and the two letters it joins."""
     kinds = word.segment_kinds
     inks = [word.segment_points(k) for k, kind in enumerate(kinds) if kind == "letter"]
     out = []
@@ -114,27 +117,31 @@ def word_connections(word) -> list[tuple[np.ndarray, list[np.ndarray]]]:
                     word.segment_points(k + 1)[:1],
                 ]
             )
-            out.append((path, inks))
+            out.append((path, inks, (word.segment_points(k - 1), word.segment_points(k + 1))))
     return out
 
 
 def measure(writer, words) -> dict:
-    from prg.pipeline.joins import ink_crossings
+    from prg.pipeline.joins import ink_crossings, overshoot, self_crossings
 
-    crossed = total = words_crossed = 0
+    crossed = total = words_crossed = looped = swung = lifts = 0
     ratios, compose = [], []
     for i, text in enumerate(words):
         writer.settings = replace(writer.settings, seed=i)
         result = writer.write(text=text)
         compose.append(result.timings["compose"])
+        lifts += result.word.segment_kinds.count("space")  # one word: every space is a lift
         hits = 0
-        for path, inks in word_connections(result.word):
+        for path, inks, (prev, nxt) in word_connections(result.word):
             total += 1
             cut = ink_crossings(path, inks) > 0
             crossed += cut
             hits += cut
+            looped += self_crossings(path) > 0
+            distance = max(np.linalg.norm(path[-1] - path[0]), 1e-9)
+            swung += overshoot(path, prev, nxt) > 0.1 + 0.1 * distance
             length = np.linalg.norm(np.diff(path, axis=0), axis=1).sum()
-            ratios.append(length / max(np.linalg.norm(path[-1] - path[0]), 1e-9))
+            ratios.append(length / distance)
         words_crossed += hits > 0
     return {
         "connections": total,
@@ -142,6 +149,9 @@ def measure(writer, words) -> dict:
         "crossing_share": crossed / total,
         "words": len(words),
         "words_crossing": words_crossed,
+        "looping": looped,
+        "leaving_band": swung,
+        "pen_lifts": lifts,
         "length_ratio_median": float(np.median(ratios)),
         "compose_ms_median": 1000 * statistics.median(compose),
     }
@@ -178,7 +188,8 @@ def main() -> int:
     )
     header = (
         f"{'decoding':>9} {'method':>8} | {'crossing':>9} {'share':>6} {'ratio':>6} | "
-        f"{'words':>6} | {'length':>7} | {'compose ms':>10} {'ratio':>6}"
+        f"{'words':>6} | {'loops':>5} {'band':>5} {'lifts':>5} | {'length':>7} | "
+        f"{'compose ms':>10} {'ratio':>6}"
     )
     print(header)
     print("-" * len(header))
@@ -190,6 +201,7 @@ def main() -> int:
         print(
             f"{r['decoding']:>9} {r['method']:>8} | {r['crossing']:>4}/{r['connections']:<4} "
             f"{r['crossing_share']:>6.0%} {r['crossing_ratio']:>6.2f} | {r['words_crossing']:>6} | "
+            f"{r['looping']:>5} {r['leaving_band']:>5} {r['pen_lifts']:>5} | "
             f"{r['length_ratio_median']:>7.2f} | {r['compose_ms_median']:>10.1f} "
             f"{r['compose_ratio']:>6.2f}{flag}"
         )

@@ -156,6 +156,18 @@ def connections_rows(d: dict) -> list[Row]:
                 "<= 10 %",
             )
         )
+        bad, ref_bad = (x["looping"] + x["leaving_band"] for x in (r, ref))
+        rows.append(
+            Row(
+                f"connections that loop + that swing past both letters ({r['decoding']} letters)",
+                f"{r['looping']} + {r['leaving_band']} of {r['connections']}, "
+                f"{r['pen_lifts']} pen lifts",
+                "the paper's Algorithm 1",
+                f"{ref['looping']} + {ref['leaving_band']} of {ref['connections']}, "
+                f"{ref['pen_lifts']} pen lifts",
+                max(bad, 0.5) / max(ref_bad, 0.5),
+            )
+        )
         rows.append(
             Row(
                 f"compose a word (layout, connections, DMP), {r['decoding']} letters",

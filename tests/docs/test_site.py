@@ -23,6 +23,7 @@ DOCTESTED = [
     "prg.writer",
     "prg.pipeline.dmp.regression",
     "prg.pipeline.dmp.integration",
+    "prg.pipeline.joins",
     "studies.analysis.stats.proportions",
     "studies.analysis.stats.parametric",
 ]

@@ -411,7 +411,7 @@ def connect_sequence(
         if pen_up or (method == "hand" and lifts_pen(a, b)):
             out.append(dataclasses.replace(straight_connection(a, b, params.delta), pen_up=True))
         elif method == "hand":
-            out.append(hand_connection(a, b, letters, params))
+            out.append(hand_connection(a, b, letters, params, lift=True))
         elif method == "alg1":
             out.append(connect_letters(a, b, **params.as_kwargs()))
         else:

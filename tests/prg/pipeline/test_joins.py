@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from prg.pipeline.connect import ConnectionSettings, connect_letters
-from prg.pipeline.joins import hand_connection, ink_crossings
+from prg.pipeline.joins import hand_connection, ink_crossings, overshoot, self_crossings
 from tests.helpers.joins import _arc
 
 DELTA = ConnectionSettings().delta
@@ -54,6 +54,48 @@ def test_an_o_entered_at_its_top_is_not_cut_through():
     assert ink_crossings(_path(prev, alg1, o), [prev, o]) >= ink_crossings(
         _path(prev, mine, o), [prev, o]
     )
+
+
+def test_an_o_left_at_its_top_is_bridged_to_the_next_letter_not_looped_over():
+    """Algorithm 1 leaves the o heading left, as its last stroke does, and swings round above
+    both letters; the hand's stroke turns at the o's top and bridges across, in their band."""
+    o = _arc((0.0, 0.37), (0.3, 0.37), 90, 450)  # counter-clockwise, closes at its top
+    stem = np.column_stack([np.linspace(0.55, 0.75, 30), np.linspace(0.74, 0.0, 30)])
+    clearance = 0.1 + 0.1 * np.linalg.norm(stem[0] - o[-1])
+    alg1 = connect_letters(o, stem, **ConnectionSettings().as_kwargs())
+    assert overshoot(_path(o, alg1, stem), o, stem) > clearance  # the case is the loop's
+    path = _path(o, hand_connection(o, stem, [o, stem]), stem)
+    assert ink_crossings(path, [o, stem]) == self_crossings(path) == 0
+    assert overshoot(path, o, stem) <= clearance
+
+
+def test_an_arch_into_an_o_clears_the_o_not_the_ascender_before_it():
+    """An l ends at its foot; the o after it starts at its top left, so the straight way in
+    cuts the o. The stroke arches over the o at the o's height, not over the l's loop (the
+    demo's "hello" rose higher than the l between its last two letters)."""
+    up = np.column_stack([np.linspace(0.0, 0.25, 40), np.linspace(0.0, 1.5, 40)])
+    down = np.column_stack([np.linspace(0.25, 0.3, 30), np.linspace(1.5, 0.0, 30)])
+    ell = np.concatenate([up, down])
+    o = _arc((1.0, 0.35), (0.35, 0.35), 120, 480)
+    assert ink_crossings(np.stack([ell[-1], o[0]]), [o]) > 0  # the straight way in cuts it
+    path = _path(ell, hand_connection(ell, o, [ell, o]), o)
+    assert ink_crossings(path, [ell, o]) == 0
+    assert path[:, 1].max() < 0.7 + 0.25 < 1.5  # just over the o, well under the l's top
+
+
+def test_no_clean_join_means_the_pen_is_lifted():
+    """A letter that ends inside its own closed ink: every stroke to the next letter cuts it.
+    Asked to, the hand method lifts the pen instead (a straight pen-up travel)."""
+    from prg.pipeline.connect import connect_sequence
+
+    box = _polyline((0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0), (0.0, 0.1), (0.55, 0.5))
+    nxt = _arc((1.8, 0.37), (0.3, 0.37), 150, 510)
+    joined = hand_connection(box, nxt, [box, nxt])
+    assert not joined.pen_up and ink_crossings(_path(box, joined, nxt), [box, nxt]) > 0
+    lifted = hand_connection(box, nxt, [box, nxt], lift=True)
+    assert lifted.pen_up
+    assert connect_sequence([box, nxt], method="hand")[0].pen_up
+    assert not connect_sequence([box, nxt], method="alg1")[0].pen_up  # the paper never lifts
 
 
 @settings(max_examples=80, deadline=None)
@@ -194,6 +236,19 @@ def test_only_a_letter_ending_left_of_its_middle_that_must_go_back_over_itself_l
     assert not lifts_pen(slash, NEXT_O + np.array([0.3, 0.0]))
     hook = _polyline((0.5, 0.75), (0.0, 0.0), (0.5, 0.3), (0.1, 0.3))  # ends left, inside itself
     assert lifts_pen(hook, NEXT_O + np.array([0.3, 0.0]))
+
+
+def test_a_letter_that_starts_on_its_far_side_is_entered_by_lifting_the_pen():
+    """A print a starts at its top right: from a letter on its left the way in goes round or
+    through its bowl. An o started at its top middle or left is joined."""
+    from prg.pipeline.joins import START_FAR, lifts_pen
+
+    foot = _polyline((-0.4, 0.75), (-0.4, 0.0), (0.0, 0.0))  # ends on the baseline, heading right
+    a = _arc((1.0, 0.37), (0.3, 0.37), 30, 360)
+    assert (a[0, 0] - a[:, 0].min()) / np.ptp(a[:, 0]) > START_FAR
+    assert lifts_pen(foot, a)
+    for start_deg in (90, 150):
+        assert not lifts_pen(foot, _arc((1.0, 0.37), (0.3, 0.37), start_deg, start_deg + 360))
 
 
 def test_the_hand_method_lifts_the_pen_after_a_print_descender_and_only_it():

@@ -3,8 +3,12 @@ subsets per family, rest-to-rest timing, one DMP a word)."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from prg.evaluation.kinematics import (
     power_law,
@@ -60,3 +64,29 @@ def test_min_jerk_rests_at_both_ends():
     assert s[0] == 0 and s[-1] == 1 and np.all(np.diff(s) >= 0)
     v = np.diff(s)
     assert v[0] < 1e-4 and v[-1] < 1e-4
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    log_speed=st.lists(st.floats(-3.0, 3.0), min_size=1, max_size=300),
+    accel=st.floats(0.5, 500.0),
+)
+def test_the_pen_speeds_up_and_slows_down_no_faster_than_its_limit(log_speed, accel):
+    """The cap is the largest profile under the asked one whose change per step obeys
+    v dv/ds <= accel both ways: below the asked speed everywhere, within the limit between
+    every two steps, and touching the asked speed wherever the limit allows it (the forward
+    and backward passes written out step by step)."""
+    from prg.pipeline.timing import _limit_acceleration
+
+    ds = 0.005
+    asked = np.exp(np.array(log_speed))
+    capped = _limit_acceleration(asked, ds, accel)
+    reach = 2.0 * accel * ds
+    assert np.all(capped <= asked * (1 + 1e-9))
+    assert np.all(np.abs(np.diff(capped**2)) <= reach * (1 + 1e-6) + 1e-9)
+    expected = asked.copy()
+    for i in range(1, len(expected)):
+        expected[i] = min(expected[i], math.sqrt(expected[i - 1] ** 2 + reach))
+    for i in range(len(expected) - 2, -1, -1):
+        expected[i] = min(expected[i], math.sqrt(expected[i + 1] ** 2 + reach))
+    np.testing.assert_allclose(capped, expected, rtol=1e-8)
