@@ -52,7 +52,9 @@ def written(tmp_path_factory):
     torch.manual_seed(0)
     model = MUSE().eval()
     inputs = label_inputs(TEXT)
-    result = Writer(model, GenerateSettings(mode="posterior")).generate(Perception(TEXT, inputs))
+    # the paper's joins: an untrained model's scribbles leave the hand joins no clean stroke
+    settings = GenerateSettings(mode="posterior", method="alg1")
+    result = Writer(model, settings).generate(Perception(TEXT, inputs))
     word, rollout = result.word, result.rollout
     letters = decode_letters(model, inputs)
     images = np.random.default_rng(0).random((4, 1, 28, 28)).astype(np.float32)
