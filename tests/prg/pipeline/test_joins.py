@@ -146,6 +146,32 @@ def test_letters_that_face_each_other_are_joined_without_cutting_either(
     assert ink_crossings(_path(prev, result, nxt), [prev, nxt]) == 0
 
 
+@settings(max_examples=60, deadline=None)
+@given(
+    gap=st.floats(0.05, 0.8),
+    rise=st.floats(-0.4, 0.6),
+    exit_deg=st.floats(-180, 180),
+    entry_deg=st.floats(-180, 180),
+    size=st.floats(0.2, 0.5),
+    turn=st.sampled_from([-300, 300]),
+)
+def test_the_hand_method_joins_cleanly_or_lifts_the_pen(gap, rise, exit_deg, entry_deg, size, turn):
+    """Any two round letters side by side, joined by the default method: either the pen lifts,
+    or the stroke crosses no ink, does not loop and stays within an arch's clearance of the band
+    the two letters span."""
+    from prg.pipeline.connect import connect_sequence
+
+    prev = _arc((0.0, size), (size, size), exit_deg - turn, exit_deg)
+    nxt = _arc((2 * size + gap, size + rise), (size, size), entry_deg, entry_deg + turn)
+    (result,) = connect_sequence([prev, nxt], method="hand")
+    if result.pen_up:
+        return
+    path = _path(prev, result, nxt)
+    assert ink_crossings(path, [prev, nxt]) == self_crossings(path) == 0
+    clearance = 0.1 + 0.1 * max(np.linalg.norm(nxt[0] - prev[-1]), DELTA)
+    assert overshoot(path, prev, nxt) <= clearance
+
+
 def test_the_turn_into_the_next_letter_follows_its_first_stroke():
     """A candidate curve enters the next letter along its first step (no kink at the join)."""
     prev = np.column_stack([np.linspace(-0.6, 0.0, 30), np.zeros(30)])
