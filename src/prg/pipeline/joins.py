@@ -18,7 +18,8 @@ ink between two letters is often an ascender the stroke never passes (the arch o
 over the l); a writer bridges to the next letter at the o's height instead. Candidates are
 sampled every ``delta`` or less, so the connection keeps the no-gap guarantee of
 :mod:`prg.pipeline.connect`. Where a letter ends, or the next one starts, on the far side of its
-own ink, the writer lifts the pen instead (:func:`lifts_pen`).
+own ink, the writer lifts the pen instead (:func:`lifts_pen`), and so does
+:func:`~prg.pipeline.connect.connect_sequence` where no candidate is clean (``lift=True``).
 
 :func:`ink_crossings` is the measure: proper intersections of a connection with the letters'
 ink, those within ``margin`` of the connection's two ends not counted (a stroke leaves and enters
