@@ -122,7 +122,7 @@ def word_connections(word) -> list[tuple[np.ndarray, list[np.ndarray], tuple]]:
 
 
 def measure(writer, words) -> dict:
-    from prg.pipeline.joins import ink_crossings, overshoot, self_crossings
+    from prg.pipeline.joins import arch_clearance, ink_crossings, overshoot, self_crossings
 
     crossed = total = words_crossed = looped = swung = lifts = 0
     ratios, compose = [], []
@@ -139,7 +139,7 @@ def measure(writer, words) -> dict:
             hits += cut
             looped += self_crossings(path) > 0
             distance = max(np.linalg.norm(path[-1] - path[0]), 1e-9)
-            swung += overshoot(path, prev, nxt) > 0.1 + 0.1 * distance
+            swung += overshoot(path, prev, nxt) > arch_clearance(distance)
             length = np.linalg.norm(np.diff(path, axis=0), axis=1).sum()
             ratios.append(length / distance)
         words_crossed += hits > 0

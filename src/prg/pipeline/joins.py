@@ -168,8 +168,9 @@ def _cubic(p0, p1, p2, p3, delta: float) -> np.ndarray:
     return np.column_stack([np.interp(s, arc, curve[:, 0]), np.interp(s, arc, curve[:, 1])])
 
 
-def _clearance(dist: float) -> float:
-    """How far an arch clears the ink (cm), for ends ``dist`` apart."""
+def arch_clearance(dist: float) -> float:
+    """How far an arch clears the ink (cm), for ends ``dist`` apart: also how far a connection
+    may pass above or below both letters (:func:`overshoot`) and still be in their band."""
     return 0.1 + 0.1 * dist
 
 
@@ -183,7 +184,7 @@ def _candidates(prev: np.ndarray, nxt: np.ndarray, inks, delta: float) -> list[n
     low, high = min(p0[0], p3[0]) - 0.1, max(p0[0], p3[0]) + 0.1
     between = every[(every[:, 0] >= low) & (every[:, 0] <= high)]
     between = between if len(between) else np.stack([p0, p3])
-    clearance = _clearance(dist)
+    clearance = arch_clearance(dist)
     out = [_cubic(p0, p0 + (p3 - p0) / 3, p3 - (p3 - p0) / 3, p3, delta)]  # straight
     for reach in (0.15, 0.35, 0.7, 1.2):
         out.append(_cubic(p0, p0 + reach * dist * out_dir, p3 - reach * dist * in_dir, p3, delta))
@@ -329,7 +330,7 @@ def hand_connection(
     nxt = np.asarray(nxt, dtype=np.float64)
     alg1 = connect_letters(prev, nxt, **params.as_kwargs())
     dist = max(math.hypot(*(nxt[0] - prev[-1])), params.delta)
-    tolerance = _clearance(dist)
+    tolerance = arch_clearance(dist)
 
     def path_of(points):
         return np.concatenate([prev[-1:], points, nxt[:1]])

@@ -98,23 +98,29 @@ def test_no_clean_join_means_the_pen_is_lifted():
     assert not connect_sequence([box, nxt], method="alg1")[0].pen_up  # the paper never lifts
 
 
+@st.composite
+def round_letter_pairs(draw):
+    """Two round letters side by side: arcs of 300 degrees either way, any exit and entry, the
+    second a little apart and higher or lower."""
+    size, gap, rise = (
+        draw(st.floats(0.2, 0.5)),
+        draw(st.floats(0.05, 0.8)),
+        draw(st.floats(-0.4, 0.6)),
+    )
+    exit_deg, entry_deg = draw(st.floats(-180, 180)), draw(st.floats(-180, 180))
+    turn = draw(st.sampled_from([-300, 300]))
+    prev = _arc((0.0, size), (size, size), exit_deg - turn, exit_deg)
+    nxt = _arc((2 * size + gap, size + rise), (size, size), entry_deg, entry_deg + turn)
+    return prev, nxt
+
+
 @settings(max_examples=80, deadline=None)
-@given(
-    gap=st.floats(0.05, 0.8),
-    rise=st.floats(-0.4, 0.6),
-    exit_deg=st.floats(-180, 180),
-    entry_deg=st.floats(-180, 180),
-    size=st.floats(0.2, 0.5),
-    turn=st.sampled_from([-300, 300]),
-)
-def test_a_connection_may_bend_but_never_leaves_a_gap_nor_cuts_more_than_algorithm_1(
-    gap, rise, exit_deg, entry_deg, size, turn
-):
+@given(pair=round_letter_pairs())
+def test_a_connection_may_bend_but_never_leaves_a_gap_nor_cuts_more_than_algorithm_1(pair):
     """Any two round letters side by side: the connection starts where the first ends, ends
     where the second starts, leaves no gap wider than delta, and crosses no more ink than the
     paper's Algorithm 1 would."""
-    prev = _arc((0.0, size), (size, size), exit_deg - turn, exit_deg)
-    nxt = _arc((2 * size + gap, size + rise), (size, size), entry_deg, entry_deg + turn)
+    prev, nxt = pair
     result = hand_connection(prev, nxt, [prev, nxt])
     path = _path(prev, result, nxt)
     steps = np.linalg.norm(np.diff(path, axis=0), axis=1)
@@ -147,22 +153,14 @@ def test_letters_that_face_each_other_are_joined_without_cutting_either(
 
 
 @settings(max_examples=60, deadline=None)
-@given(
-    gap=st.floats(0.05, 0.8),
-    rise=st.floats(-0.4, 0.6),
-    exit_deg=st.floats(-180, 180),
-    entry_deg=st.floats(-180, 180),
-    size=st.floats(0.2, 0.5),
-    turn=st.sampled_from([-300, 300]),
-)
-def test_the_hand_method_joins_cleanly_or_lifts_the_pen(gap, rise, exit_deg, entry_deg, size, turn):
+@given(pair=round_letter_pairs())
+def test_the_hand_method_joins_cleanly_or_lifts_the_pen(pair):
     """Any two round letters side by side, joined by the default method: either the pen lifts,
     or the stroke crosses no ink, does not loop and stays within an arch's clearance of the band
     the two letters span."""
     from prg.pipeline.connect import connect_sequence
 
-    prev = _arc((0.0, size), (size, size), exit_deg - turn, exit_deg)
-    nxt = _arc((2 * size + gap, size + rise), (size, size), entry_deg, entry_deg + turn)
+    prev, nxt = pair
     (result,) = connect_sequence([prev, nxt], method="hand")
     if result.pen_up:
         return
