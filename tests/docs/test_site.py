@@ -24,6 +24,7 @@ DOCTESTED = [
     "prg.pipeline.dmp.regression",
     "prg.pipeline.dmp.integration",
     "prg.pipeline.joins",
+    "prg.pipeline.timing",
     "studies.analysis.stats.proportions",
     "studies.analysis.stats.parametric",
 ]

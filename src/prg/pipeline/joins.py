@@ -94,14 +94,20 @@ def ink_crossings(path: np.ndarray, inks: Sequence[np.ndarray], margin: float = 
     total = 0
     for ink in inks:
         ink = np.asarray(ink, dtype=np.float64)
-        if len(ink) < 2 or (ink.max(0) < low).any() or (ink.min(0) > high).any():
-            continue  # the boxes do not overlap: no crossing
-        hits = _segments_cross(path[:-1], path[1:], ink[:-1], ink[1:])
+        if len(ink) < 2:
+            continue
+        a, b = ink[:-1], ink[1:]
+        # only the ink segments whose boxes meet the path's box can cross it
+        near_box = ((np.maximum(a, b) >= low) & (np.minimum(a, b) <= high)).all(axis=1)
+        if not near_box.any():
+            continue
+        a, b = a[near_box], b[near_box]
+        hits = _segments_cross(path[:-1], path[1:], a, b)
         if not hits.any():
             continue
         _, j = np.nonzero(hits)
         # where the two segments meet, roughly: the middle of the ink segment
-        where = 0.5 * (ink[j] + ink[j + 1])
+        where = 0.5 * (a[j] + b[j])
         near = np.min(np.linalg.norm(where[:, None, :] - ends[None], axis=-1), axis=1)
         total += int((near > margin).sum())
     return total
@@ -156,16 +162,29 @@ def _direction(points: np.ndarray, from_end: bool) -> np.ndarray:
     return np.array([1.0, 0.0])
 
 
-def _cubic(p0, p1, p2, p3, delta: float) -> np.ndarray:
-    """Points strictly between ``p0`` and ``p3`` on the cubic Bezier curve, gaps <= ``delta``."""
-    fine = np.linspace(0.0, 1.0, 400)[:, None]
-    curve = (
-        (1 - fine) ** 3 * p0 + 3 * (1 - fine) ** 2 * fine * p1 + 3 * (1 - fine) * fine**2 * p2
-    ) + fine**3 * p3
-    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(curve, axis=0), axis=1))])
-    n = max(1, math.ceil(arc[-1] / delta * 1.01))
-    s = np.linspace(0.0, arc[-1], n + 1)[1:-1]
-    return np.column_stack([np.interp(s, arc, curve[:, 0]), np.interp(s, arc, curve[:, 1])])
+def _bezier_basis(t: np.ndarray) -> np.ndarray:
+    """The cubic Bezier (Bernstein) basis at parameters ``t`` (n,): (n, 4)."""
+    return np.stack([(1 - t) ** 3, 3 * (1 - t) ** 2 * t, 3 * (1 - t) * t**2, t**3], axis=1)
+
+
+#: The curves are sampled at 400 parameters, then resampled at equal steps along their length.
+_BEZIER = _bezier_basis(np.linspace(0.0, 1.0, 400))
+
+
+def _cubics(controls: np.ndarray, delta: float) -> list[np.ndarray]:
+    """For each cubic Bezier curve of ``controls`` (c, 4, 2), its points strictly between the
+    first and the last control point, gaps <= ``delta`` (all curves evaluated at once)."""
+    curves = _BEZIER @ controls  # (c, 400, 2)
+    steps = np.linalg.norm(np.diff(curves, axis=1), axis=2)
+    arcs = np.concatenate([np.zeros((len(curves), 1)), np.cumsum(steps, axis=1)], axis=1)
+    out = []
+    for curve, arc in zip(curves, arcs):
+        n = max(1, math.ceil(arc[-1] / delta * 1.01))
+        s = np.linspace(0.0, arc[-1], n + 1)[1:-1]
+        out.append(
+            np.column_stack([np.interp(s, arc, curve[:, 0]), np.interp(s, arc, curve[:, 1])])
+        )
+    return out
 
 
 def arch_clearance(dist: float) -> float:
@@ -185,9 +204,9 @@ def _candidates(prev: np.ndarray, nxt: np.ndarray, inks, delta: float) -> list[n
     between = every[(every[:, 0] >= low) & (every[:, 0] <= high)]
     between = between if len(between) else np.stack([p0, p3])
     clearance = arch_clearance(dist)
-    out = [_cubic(p0, p0 + (p3 - p0) / 3, p3 - (p3 - p0) / 3, p3, delta)]  # straight
+    controls = [(p0, p0 + (p3 - p0) / 3, p3 - (p3 - p0) / 3, p3)]  # straight
     for reach in (0.15, 0.35, 0.7, 1.2):
-        out.append(_cubic(p0, p0 + reach * dist * out_dir, p3 - reach * dist * in_dir, p3, delta))
+        controls.append((p0, p0 + reach * dist * out_dir, p3 - reach * dist * in_dir, p3))
     top, bottom = between[:, 1].max(), between[:, 1].min()
     # from just over the higher end to well over the ink, and the same under: the lowest arch
     # that clears the ink is the one a writer draws (the ink between may be a tall letter's
@@ -202,17 +221,17 @@ def _candidates(prev: np.ndarray, nxt: np.ndarray, inks, delta: float) -> list[n
         height = (level - (p0[1] + p3[1]) / 8) / 0.75
         p1 = np.array([p0[0] + 0.3 * dist * out_dir[0], height])
         p2 = np.array([p3[0] - 0.3 * dist * in_dir[0], height])
-        out.append(_cubic(p0, p1, p2, p3, delta))  # arched over the ink, or dipping under it
-    return out
+        controls.append((p0, p1, p2, p3))  # arched over the ink, or dipping under it
+    return _cubics(np.array(controls, dtype=np.float64), delta)
 
 
 def _turning(path: np.ndarray) -> float:
-    steps = np.diff(path, axis=0)
-    steps = steps[np.linalg.norm(steps, axis=1) > 1e-12]
+    """The total absolute turning of a path (radians), its steps as complex numbers."""
+    steps = np.diff(path[:, 0] + 1j * path[:, 1])
+    steps = steps[np.abs(steps) > 1e-12]
     if len(steps) < 2:
         return 0.0
-    angle = np.arctan2(steps[:, 1], steps[:, 0])
-    return float(np.abs(np.angle(np.exp(1j * np.diff(angle)))).sum())
+    return float(np.abs(np.angle(steps[1:] * steps[:-1].conj())).sum())
 
 
 #: Letters a writer leaves from where they close, at the top (a cursive ``o``).

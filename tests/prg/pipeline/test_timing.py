@@ -9,11 +9,18 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy.signal import savgol_filter
 
 from prg.evaluation.kinematics import (
     power_law,
 )
-from prg.pipeline.timing import human_samples, min_jerk, rest_to_rest_samples, speed_and_curvature
+from prg.pipeline.timing import (
+    human_samples,
+    min_jerk,
+    rest_to_rest_samples,
+    savgol_derivative,
+    speed_and_curvature,
+)
 from tests.helpers.kinematics import DT, _ellipse
 
 
@@ -90,3 +97,49 @@ def test_the_pen_speeds_up_and_slows_down_no_faster_than_its_limit(log_speed, ac
     for i in range(len(expected) - 2, -1, -1):
         expected[i] = min(expected[i], math.sqrt(expected[i + 1] ** 2 + reach))
     np.testing.assert_allclose(capped, expected, rtol=1e-8)
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    n=st.integers(5, 120),
+    window_share=st.floats(0.0, 1.0),
+    deriv=st.sampled_from([0, 1, 2, 3]),
+    delta=st.floats(1e-3, 1.0),
+    seed=st.integers(0, 2**16),
+)
+def test_savgol_derivative_is_scipys_savgol_filter(n, window_share, deriv, delta, seed):
+    """The cached operators give what scipy.signal.savgol_filter gives (cubic, mode="interp"),
+    interior and both edges, for any odd window from 5 to the path's length."""
+    largest = n if n % 2 else n - 1
+    window = 5 + 2 * round(window_share * (largest - 5) / 2)
+    xy = np.random.default_rng(seed).normal(size=(n, 2)).cumsum(axis=0)
+    expected = savgol_filter(xy, window, 3, deriv=deriv, delta=delta, axis=0)
+    scale = np.abs(expected).max() + 1.0
+    np.testing.assert_allclose(
+        savgol_derivative(xy, window, deriv, delta), expected, atol=1e-9 * scale
+    )
+
+
+def test_the_stroke_to_stroke_variation_has_the_asked_strength_and_length():
+    """On a straight line (the power law's speed is constant there) the pen's log speed varies
+    with the asked standard deviation, and is correlated over the 0.8 cm of path the noise is
+    smoothed over: exp(-lag^2 / (4 sigma^2)) for Gaussian-smoothed white noise."""
+    line = np.column_stack([np.linspace(0.0, 200.0, 50), np.zeros(50)])
+    grid = np.arange(5.0, 195.0, 0.05)
+    stds, near, far = [], [], []
+    for seed in range(3):
+        samples, _ = human_samples(line, 2.0, 0.3, 100, seed=seed, variation=0.25)
+        speed = np.linalg.norm(np.diff(samples, axis=0), axis=1) * 100
+        log_speed = np.log(np.interp(grid, samples[1:, 0], speed))
+        log_speed -= log_speed.mean()
+        stds.append(log_speed.std())
+
+        near.append(_autocorrelation(log_speed, round(0.8 / 0.05)))
+        far.append(_autocorrelation(log_speed, round(3.2 / 0.05)))
+    assert np.mean(stds) == pytest.approx(0.25, rel=0.15)
+    assert np.mean(near) == pytest.approx(math.exp(-0.25), abs=0.1)
+    assert abs(np.mean(far)) < 0.2
+
+
+def _autocorrelation(centred: np.ndarray, lag: int) -> float:
+    return float((centred[:-lag] * centred[lag:]).mean() / centred.var())
