@@ -54,13 +54,12 @@ from studies.design_config import (
     WORD_RE,
     AttentionCheck,
     StudySettings,
-    apply_overrides,
     default_completion_code,
     load_study,
     normalise_answer,
-    parse_override,
     study_from_dict,
 )
+from studies.overrides import apply_overrides, parse_override
 from studies.stimuli import ROBOT
 
 __all__ = [  # with, re-exported, the names of studies.design_config and ROBOT

@@ -1,9 +1,9 @@
 """A study's YAML file (``conf/study/*.yaml``), read and checked into a :class:`StudySettings`.
 
-:func:`load_study` reads the file and applies ``key=value`` overrides (:func:`apply_overrides`,
-the ``--set`` of ``prg-study build``); :func:`study_from_dict` checks every key and value and
-fills in the defaults, raising :class:`prg.errors.UsageError` with one line that names the bad
-key. The ``render`` section is checked as :class:`studies.stimuli.RenderStyle` takes it, the
+:func:`load_study` reads the file and applies ``key=value`` overrides
+(:func:`studies.overrides.apply_overrides`, the ``--set`` of ``prg-study build``);
+:func:`study_from_dict` checks every key and value and fills in the defaults, raising
+:class:`prg.errors.UsageError` with one line that names the bad key. The ``render`` section is checked as :class:`studies.stimuli.RenderStyle` takes it, the
 ``analysis`` section as ``prg-study analyze`` reads it (:mod:`studies.analysis.config`).
 
 The designs built from a :class:`StudySettings` are in :mod:`studies.design`.
@@ -23,6 +23,7 @@ from urllib.parse import urlsplit
 import yaml
 
 from prg.errors import UsageError
+from studies.overrides import apply_overrides
 from studies.stimuli import DELAYED_MAX_SIZE, RenderStyle, sets_delayed_strokes
 
 KINDS = ("turing", "readability")
@@ -553,36 +554,6 @@ def _checks(raw: Any, config: StudySettings) -> tuple[AttentionCheck, ...]:
             expect = {"typed_text": text}
         checks.append(AttentionCheck(after, instruction.strip(), expect, word))
     return tuple(checks)
-
-
-def parse_override(text: str) -> tuple[list[str], Any]:
-    """``"a.b=value"`` -> (["a", "b"], value parsed as YAML); raises :class:`UsageError`."""
-    key, sep, value = text.partition("=")
-    keys = key.strip().split(".")
-    if not sep or not all(k.strip() for k in keys):
-        raise UsageError(f"override {text!r} must look like key=value or section.key=value")
-    try:
-        parsed = yaml.safe_load(value) if value.strip() else None
-    except yaml.YAMLError:
-        raise UsageError(f"override {text!r}: the value is not valid YAML") from None
-    return [k.strip() for k in keys], parsed
-
-
-def apply_overrides(doc: dict, overrides: Sequence[str]) -> dict:
-    """A copy of ``doc`` with ``key=value`` overrides applied (nested keys with dots)."""
-    out = yaml.safe_load(yaml.safe_dump(doc))
-    for text in overrides:
-        keys, value = parse_override(text)
-        node = out
-        for key in keys[:-1]:
-            child = node.get(key)
-            if child is None:
-                child = node[key] = {}
-            if not isinstance(child, dict):
-                raise UsageError(f"override {text!r}: {key!r} is not a section")
-            node = child
-        node[keys[-1]] = value
-    return out
 
 
 def load_study(path: str | Path, overrides: Sequence[str] = ()) -> StudySettings:

@@ -1,5 +1,6 @@
 """The layering the code keeps: commands apart from the library and from each other, one home for
-atomic renames, and no library module that reaches up into the command layer."""
+atomic renames, no library module that reaches up into the command layer, a test file for every
+module, and modules of one concept each."""
 
 from __future__ import annotations
 
@@ -141,3 +142,17 @@ def test_every_module_has_a_test_file_at_its_mirrored_path_or_says_why_not():
     assert not unlisted, f"modules without tests/<package path>/test_<module>.py: {unlisted}"
     tested = sorted(UNMIRRORED.keys() - missing)
     assert not tested, f"these now have a test file; take them off UNMIRRORED: {tested}"
+
+
+#: One concept a module: no module of the library or of the study toolkit is longer than this.
+MAX_MODULE_LINES = 600
+
+
+def test_no_module_is_longer_than_one_concept_needs():
+    long = {
+        str(path.relative_to(REPO)): lines
+        for root in (SRC, REPO / "studies")
+        for path in root.rglob("*.py")
+        if (lines := len(path.read_text(encoding="utf-8").splitlines())) > MAX_MODULE_LINES
+    }
+    assert not long, f"modules over {MAX_MODULE_LINES} lines (split them by concept): {long}"
