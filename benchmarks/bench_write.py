@@ -1,16 +1,17 @@
 """Benchmark writing a word: label input -> letters -> layout -> connections -> one DMP rollout.
 
 For words of 1-12 letters (``--reps`` random lowercase words per length, seeded), the whole
-``prg.writer.Writer.generate`` path of a warm writer is timed in the default decoding (letters
-in a writer's hand, ``generate.mode=hand``; decode every letter, final processing map,
-Algorithm 1 connection strokes, rest-to-rest timing, DMP fit and rollout), side by side in the
-same run with two references:
+``prg.writer.Writer.generate`` path of a warm writer is timed in the default settings
+(``GenerateSettings()``: letters in a writer's hand, ``generate.mode=hand``; decode every
+letter, final processing map, the hand joins, ``generate.method=hand``, the human timing,
+``generate.timing=human``, DMP fit and rollout), side by side in the same run with two
+references:
 
 - ``decode``: the model's generation map alone for the same letters (one batched
   ``model.generate`` under ``torch.no_grad``: the plain PyTorch floor) — ratio total / decode
   says what the rest of the pipeline costs;
-- ``straight``: the same pipeline with the paper's straight-line joiner instead of Algorithm 1
-  — ratio alg1 / straight is the price of the connection algorithm.
+- ``straight``: the same pipeline with the paper's straight-line joiner instead of the hand
+  joins — ratio default / straight is the price of joining letters as a hand does.
 
 It also reports the DMP's reproduction error (RMSE and max, mm, rollout against the timed
 demonstration) with the default settings (``conf/write.yaml``: 70 basis functions per 100
@@ -92,8 +93,8 @@ def words_of(length: int, reps: int, rng: random.Random) -> list[str]:
 
 
 def time_word(writer: Writer, straight: Writer, text: str) -> dict:
-    """One word by two warm writers (Algorithm 1 and the straight joiner), and the model's
-    generation map alone."""
+    """One word by two warm writers (the default joins and the straight joiner), and the
+    model's generation map alone."""
     model, params = writer.model, writer.settings
     inputs = label_inputs(text)
     start = time.perf_counter()
