@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import warnings
 
 import numpy as np
@@ -108,7 +109,10 @@ def mixed_logit(
                 fep_names=list(exog.columns),
                 vcp_names=[name for name, _, _ in groups],
             )
-            res = model.fit_vb()
+            # statsmodels starts the standard deviations at exp(-0.5), each jittered at random
+            # (unseeded): started without the jitter, the same answers give the same report
+            start_sd = np.full(model.k_fep + model.k_vcp + model.k_vc, math.exp(-0.5))
+            res = model.fit_vb(sd=start_sd)
         if any("converge" in str(w.message).lower() for w in caught):
             status = (
                 "converged with warnings (optimizer reported non-convergence); treat with caution"
