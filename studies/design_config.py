@@ -3,8 +3,9 @@
 :func:`load_study` reads the file and applies ``key=value`` overrides
 (:func:`studies.overrides.apply_overrides`, the ``--set`` of ``prg-study build``);
 :func:`study_from_dict` checks every key and value and fills in the defaults, raising
-:class:`prg.errors.UsageError` with one line that names the bad key. The ``render`` section is checked as :class:`studies.stimuli.RenderStyle` takes it, the
-``analysis`` section as ``prg-study analyze`` reads it (:mod:`studies.analysis.config`).
+:class:`prg.errors.UsageError` with one line that names the bad key. The ``render`` section is
+checked as :class:`studies.stimuli.RenderStyle` takes it, the ``analysis`` section as
+``prg-study analyze`` reads it (:mod:`studies.analysis.config`).
 
 The designs built from a :class:`StudySettings` are in :mod:`studies.design`.
 """
